@@ -1,0 +1,119 @@
+"""Properties of a polygonal rigid body from its vertices, seed eqs. 1-4."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+class PolygonError(ValueError):
+    """The vertices do not describe a simple polygon with positive area."""
+
+
+@dataclass(frozen=True)
+class Polygon:
+    """A simple polygon about its centroid G, vertices counterclockwise."""
+
+    vertices: np.ndarray  # (N, 2), relative to the centroid
+    area: float  # A, eq. 2
+    centroid: np.ndarray  # (2,), of the vertices as given
+    i_x1: float  # about the x1 axis through G, eq. 3
+    i_x2: float  # about the x2 axis through G, eq. 4
+    reordered: bool  # the input was clockwise and was reversed
+
+    def polar_inertia(self, mass: float) -> float:
+        """J_x3 = m / A (I_x1 + I_x2), eq. 1."""
+        return mass / self.area * (self.i_x1 + self.i_x2)
+
+
+def _cross_terms(v: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    x, y = v[:, 0], v[:, 1]
+    xn, yn = np.roll(x, -1), np.roll(y, -1)
+    return x * yn - y * xn, (x, xn), (y, yn)
+
+
+def signed_area(v: np.ndarray) -> float:
+    """Eq. 2: positive for counterclockwise vertices."""
+    cr, _, _ = _cross_terms(v)
+    return 0.5 * float(cr.sum())
+
+
+def second_moments(v: np.ndarray) -> tuple[float, float]:
+    """(I_x1, I_x2) about the origin, eqs. 3-4, for counterclockwise vertices."""
+    cr, (x, xn), (y, yn) = _cross_terms(v)
+    i_x1 = float((cr * (y * y + y * yn + yn * yn)).sum()) / 12.0
+    i_x2 = float((cr * (x * x + x * xn + xn * xn)).sum()) / 12.0
+    return i_x1, i_x2
+
+
+def centroid(v: np.ndarray) -> np.ndarray:
+    cr, (x, xn), (y, yn) = _cross_terms(v)
+    a = 0.5 * cr.sum()
+    return np.array([((x + xn) * cr).sum(), ((y + yn) * cr).sum()]) / (6.0 * a)
+
+
+def _segments_cross(p1, p2, q1, q2) -> bool:
+    """True where closed segments p1p2 and q1q2 share a point."""
+
+    def orient(a, b, c):
+        return np.sign((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]))
+
+    def on_segment(a, b, c):
+        return min(a[0], b[0]) <= c[0] <= max(a[0], b[0]) and min(a[1], b[1]) <= c[1] <= max(a[1], b[1])
+
+    o1, o2 = orient(p1, p2, q1), orient(p1, p2, q2)
+    o3, o4 = orient(q1, q2, p1), orient(q1, q2, p2)
+    if o1 != o2 and o3 != o4 and o1 * o2 <= 0 and o3 * o4 <= 0:
+        return True
+    return (
+        (o1 == 0 and on_segment(p1, p2, q1))
+        or (o2 == 0 and on_segment(p1, p2, q2))
+        or (o3 == 0 and on_segment(q1, q2, p1))
+        or (o4 == 0 and on_segment(q1, q2, p2))
+    )
+
+
+def check_simple(v: np.ndarray) -> None:
+    """Raise PolygonError for fewer than 3 vertices, repeats or crossing edges."""
+    n = len(v)
+    if n < 3:
+        raise PolygonError(f"a polygon needs at least 3 vertices, got {n}")
+    for i in range(n):
+        for j in range(i + 1, n):
+            if np.array_equal(v[i], v[j]):
+                raise PolygonError(f"vertices {i + 1} and {j + 1} coincide at {v[i].tolist()}")
+    for i in range(n):
+        for j in range(i + 1, n):
+            # adjacent edges share a vertex by construction
+            if j == i + 1 or (i == 0 and j == n - 1):
+                continue
+            if _segments_cross(v[i], v[(i + 1) % n], v[j], v[(j + 1) % n]):
+                raise PolygonError(
+                    f"edges P{i + 1}-P{(i + 1) % n + 1} and P{j + 1}-P{(j + 1) % n + 1} intersect: "
+                    "the polygon is self-intersecting"
+                )
+
+
+def polygon(vertices) -> Polygon:
+    """Validate the vertices and compute A, G, I_x1, I_x2 (eqs. 2-4) about G.
+
+    Clockwise input is taken in reverse order for eqs. 2-4 (``reordered`` is set
+    so the caller can warn); the returned vertices keep the input's numbering, so
+    ``vertex = k`` in a deck always means the k-th vertex listed, shifted to G.
+    """
+    v = np.asarray(vertices, dtype=float)
+    if v.ndim != 2 or v.shape[1] != 2:
+        raise PolygonError("vertices must be a list of [x1, x2] pairs")
+    check_simple(v)
+    a = signed_area(v)
+    scale = max(float(np.ptp(v[:, 0])), float(np.ptp(v[:, 1])), 1e-300)
+    if abs(a) <= 1e-12 * scale * scale:
+        raise PolygonError("the polygon has zero area")
+    reordered = a < 0.0
+    ccw = v[::-1] if reordered else v
+    g = centroid(ccw)
+    vg = v - g
+    i_x1, i_x2 = second_moments(ccw - g)
+    a = abs(a)
+    return Polygon(vertices=vg, area=a, centroid=g, i_x1=i_x1, i_x2=i_x2, reordered=reordered)

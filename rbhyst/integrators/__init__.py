@@ -1,0 +1,46 @@
+"""Integrators: one module per method, one registry name -> :class:`Method`.
+
+A fixed-step method names its step in the compiled loop (``kernel_id``) and
+builds that step's 3x3 coefficient matrices for a step h (``coefficients``).
+A method with a solver of its own (the reference) gives ``solve`` instead.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+N_COEF = 4  # coefficient matrices per substep level
+
+
+@dataclass(frozen=True)
+class Method:
+    name: str
+    summary: str
+    order: int
+    explicit: bool
+    kernel_id: int | None = None
+    #: (mass (3,), K0 (3, 3), h) -> (N_COEF, 3, 3)
+    coefficients: Callable[[np.ndarray, np.ndarray, float], np.ndarray] | None = None
+    #: (system, dt, options) -> Result, for methods outside the fixed-step loop
+    solve: Callable | None = None
+
+
+def _registry() -> dict[str, Method]:
+    from . import central_difference, chang
+
+    methods = (chang.METHOD, central_difference.METHOD)
+    return {m.name: m for m in methods}
+
+
+def names() -> list[str]:
+    return list(_registry())
+
+
+def get(name: str) -> Method:
+    reg = _registry()
+    if name not in reg:
+        raise KeyError(f"unknown integrator {name!r}; choose one of {', '.join(reg)}")
+    return reg[name]

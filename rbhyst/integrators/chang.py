@@ -1,0 +1,33 @@
+"""Chang's explicit method (CEM), gamma = 1/2, beta = 1/4 (Chang 2002, 2007).
+
+    D = M + dt^2/4 K0,  B1 = D^-1 M,  B2 = D^-1 M / 2
+    d+ = d + dt B1 v + dt^2 B2 a;  M a+ = p+ - R(d+);  v+ = v + dt/2 (a + a+)
+
+Explicit (no iterations), unconditionally stable while the tangent stiffness
+stays at or below K0, and on a linear system with K = K0 identical to Newmark's
+average acceleration method. The seed's explicit method ([14]) is of this family.
+"""
+
+import numpy as np
+
+from .. import kernels
+from . import N_COEF, Method
+
+
+def coefficients(mass: np.ndarray, k0: np.ndarray, h: float) -> np.ndarray:
+    m = np.diag(mass)
+    b1 = np.linalg.solve(m + 0.25 * h * h * k0, m)
+    c = np.zeros((N_COEF, 3, 3))
+    c[0] = b1
+    c[1] = 0.5 * b1
+    return c
+
+
+METHOD = Method(
+    name="chang",
+    summary="Chang's explicit method: unconditionally stable up to K0, no iterations",
+    order=2,
+    explicit=True,
+    kernel_id=kernels.CHANG,
+    coefficients=coefficients,
+)
