@@ -102,6 +102,28 @@ def run(
     say(f"wrote {target}")
 
 
+@app.command("make-record")
+def make_record(
+    out: Annotated[Path, typer.Argument(help="CSV file to write: time_s,acceleration.")],
+    duration: Annotated[float, typer.Option(min=0.1, help="Length [s].")] = 40.0,
+    dt: Annotated[float, typer.Option(min=1e-5, help="Sampling step [s].")] = 0.01,
+    pga: Annotated[float, typer.Option(min=0.0, help="Peak absolute acceleration, in --units.")] = 0.3,
+    units: Annotated[str, typer.Option(help="Units written in the header (g, m/s2, cm/s2).")] = "g",
+    seed: Annotated[int, typer.Option(help="Random seed: the same seed gives the same record.")] = 1940,
+    f_g: Annotated[float, typer.Option(help="Kanai-Tajimi ground frequency [Hz].")] = 2.5,
+):
+    """A reproducible synthetic support acceleration (Clough-Penzien filtered white noise)."""
+    import numpy as np
+
+    from .synthetic import ground_motion
+
+    t, acc = ground_motion(duration=duration, dt=dt, pga=pga, seed=seed, f_g=f_g)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    header = f"time_s,acceleration_{units.replace('/', '_')}"
+    np.savetxt(out, np.column_stack([t, acc]), delimiter=",", header=header, comments="", fmt="%.6f,%.8e")
+    say(f"wrote {out}: {len(t)} samples at {dt:g} s, peak {pga:g} {units}, seed {seed}")
+
+
 def output_dir(deck, deck_path: Path) -> Path:
     """output.directory relative to the deck's folder, default results/<deck stem>/."""
     if deck.output.directory is not None:

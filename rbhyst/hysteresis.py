@@ -52,116 +52,106 @@ def parameter_set(loading: dict, unloading: dict) -> np.ndarray:
 # --------------------------------------------------------------------------
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, error_model="numpy", inline="always")
 def branch_row(s):
     return LOADING if s > 0 else UNLOADING
 
 
-@njit(cache=True)
-def fe_ke(p, row, u):
-    """Eq. 15 and eq. 17 on one branch: (fe, ke, ok). ``ok`` is False on overflow.
+@njit(cache=True, error_model="numpy", inline="always")
+def branch_eval(p, e, row, s, u):
+    """The limiting curve c_s at u (eqs. 14-15), its slope kb + ke (eq. 17) and its
+    antiderivative C_s(u) (for the work, seed ref. [8]); ``ok`` is False on overflow.
 
-    Terms with a zero amplitude are skipped, so a bilinear-like set costs no exp.
+    Terms with a zero amplitude are skipped, so a set without beta and gamma terms
+    costs no transcendental function here at all.
     """
-    fe = 0.0
-    ke = 0.0
-    b1 = p[row, BETA1]
-    b2 = p[row, BETA2]
+    kb = p[e, row, KB]
+    f0 = p[e, row, F0]
+    c = kb * u + s * f0
+    kc = kb
+    big = u * (0.5 * kb * u + s * f0)
+    b1 = p[e, row, BETA1]
+    b2 = p[e, row, BETA2]
     if b1 != 0.0 and b2 != 0.0:
         x = b2 * u
         if x > EXP_ARG_MAX:
-            return fe, ke, False
-        e = math.exp(x)
-        fe += b1 * (e - 1.0)
-        ke += b1 * b2 * e
-    g1 = p[row, GAMMA1]
-    g2 = p[row, GAMMA2]
+            return c, kc, big, False
+        ex = math.exp(x)
+        c += b1 * (ex - 1.0)
+        kc += b1 * b2 * ex
+        big += b1 * (ex / b2 - u)
+    g1 = p[e, row, GAMMA1]
+    g2 = p[e, row, GAMMA2]
     if g1 != 0.0 and g2 != 0.0:
-        t = math.tanh(0.5 * g2 * (u - p[row, GAMMA3]))
-        fe += 2.0 * g1 * t
-        ke += g1 * g2 * (1.0 - t * t)
-    return fe, ke, True
+        x = 0.5 * g2 * (u - p[e, row, GAMMA3])
+        t = math.tanh(x)
+        c += 2.0 * g1 * t
+        kc += g1 * g2 * (1.0 - t * t)
+        # d/du (4 g1 / g2) log cosh(x) = 2 g1 tanh(x)
+        ax = abs(x)
+        big += 4.0 * g1 / g2 * (ax + math.log1p(math.exp(-2.0 * ax)))
+    return c, kc, big, True
 
 
-@njit(cache=True)
-def limiting_integral(p, row, s, ua, ub):
-    """Integral of the limiting curve c_s from ua to ub (closed form)."""
-    du = ub - ua
-    w = (0.5 * p[row, KB] * (ua + ub) + s * p[row, F0]) * du
-    b1 = p[row, BETA1]
-    b2 = p[row, BETA2]
-    if b1 != 0.0 and b2 != 0.0:
-        w += b1 * (math.exp(b2 * ua) * math.expm1(b2 * du) / b2 - du)
-    g1 = p[row, GAMMA1]
-    g2 = p[row, GAMMA2]
-    if g1 != 0.0 and g2 != 0.0:
-        # d/du [ (4 g1/g2) log cosh(g2 (u - g3)/2) ] = 2 g1 tanh(g2 (u - g3)/2)
-        xa = 0.5 * g2 * (ua - p[row, GAMMA3])
-        xb = 0.5 * g2 * (ub - p[row, GAMMA3])
-        w += 4.0 * g1 / g2 * (_log_cosh(xb) - _log_cosh(xa))
-    return w
+@njit(cache=True, error_model="numpy", inline="always")
+def vrm_update(p, e, u0, f0, s0, g0, k0, a0, u1):
+    """Advance element e of the (ne, 2, 8) parameter stack p from (u0, f0) on
+    branch s0 to displacement u1 (eq. 14).
 
-
-@njit(cache=True, inline="always")
-def _log_cosh(x):
-    ax = abs(x)
-    return ax + math.log1p(math.exp(-2.0 * ax)) - math.log(2.0)
-
-
-@njit(cache=True)
-def vrm_update(p, u0, f0, s0, g0, k0, u1):
-    """Advance one element from (u0, f0) on branch s0 to displacement u1 (eq. 14).
-
-    ``g0`` is the gap c_s0(u0) - f0 and ``k0`` the tangent at u0 (eq. 16).
-    Returns ``(f1, s1, g1, k1, kstart, work, ok)``: the new force, branch, gap,
-    tangent, the tangent at the start of the step on the (possibly new) branch,
-    the work of the force over the step (closed form) and an overflow flag.
+    The element state is (u, f, s, g, k, a): displacement, force, branch sign
+    (0 for the virgin state), gap g = c_s(u) - f, tangent k (eq. 16) and the
+    antiderivative a = C_s(u) of the current limiting curve.
+    Returns ``(f1, s1, g1, k1, a1, kstart, work, ok)``: the new state, the tangent
+    at the start of the step on the (possibly new) branch, the work of the force
+    over the step (exact, closed form) and False where an exponential overflowed.
     """
     du = u1 - u0
     if du == 0.0:
-        return f0, s0, g0, k0, k0, 0.0, True
+        return f0, s0, g0, k0, a0, k0, 0.0, True
     s = 1.0 if du > 0.0 else -1.0
     row = branch_row(s)
-    alpha = p[row, ALPHA]
-    kb = p[row, KB]
+    alpha = p[e, row, ALPHA]
     if s != s0:
         # a reversal (or the first move from the virgin state): a new branch
-        # starts at (u0, f0), eq. 14 with t_P = the current time
-        fe_a, ke_a, ok = fe_ke(p, row, u0)
+        # starts at (u0, f0), eq. 14 with t_P = now
+        c_a, kc_a, a_start, ok = branch_eval(p, e, row, s, u0)
         if not ok:
-            return f0, s0, g0, k0, k0, 0.0, False
-        g = fe_a + kb * u0 + s * p[row, F0] - f0
-        kstart = ke_a + kb + s * alpha * g
+            return f0, s0, g0, k0, a0, k0, 0.0, False
+        g = c_a - f0
+        kstart = kc_a + s * alpha * g
     else:
         g = g0
         kstart = k0
+        a_start = a0
     decay = math.exp(-alpha * abs(du))
-    fe_b, ke_b, ok = fe_ke(p, row, u1)
+    c_b, kc_b, a1, ok = branch_eval(p, e, row, s, u1)
     if not ok:
-        return f0, s0, g0, k0, kstart, 0.0, False
+        return f0, s0, g0, k0, a0, kstart, 0.0, False
     g1 = g * decay
-    f1 = fe_b + kb * u1 + s * p[row, F0] - g1
-    k1 = ke_b + kb + s * alpha * g1
-    # work: integral of c_s minus integral of the decaying gap
-    work = limiting_integral(p, row, s, u0, u1) + g * math.expm1(-alpha * abs(du)) / alpha * s
-    return f1, s, g1, k1, kstart, work, True
+    f1 = c_b - g1
+    k1 = kc_b + s * alpha * g1
+    # integral of f = c_s - g exp(-alpha |u - u0|) over the step
+    work = a1 - a_start + s * g * (decay - 1.0) / alpha
+    return f1, s, g1, k1, a1, kstart, work, True
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def drive(p, u, f_out, k_out, w_out):
-    """Impose the displacement history ``u`` on one element from the virgin state.
+    """Impose the displacement history ``u`` on one element (p: (2, 8)) from the virgin state.
 
     Writes force, tangent and cumulative work at every sample; returns the index of
     the first sample where an exponential overflowed, or -1.
     """
+    stack = p.reshape((1, 2, 8))
     f = 0.0
     s = 0.0
     g = 0.0
-    k = virgin_tangent(p, 1.0) if u.shape[0] > 1 and u[1] >= u[0] else virgin_tangent(p, -1.0)
+    k = 0.0
+    a = 0.0
     w = 0.0
     uprev = 0.0
     for i in range(u.shape[0]):
-        f, s, g, k, _, dw, ok = vrm_update(p, uprev, f, s, g, k, u[i])
+        f, s, g, k, a, _, dw, ok = vrm_update(stack, 0, uprev, f, s, g, k, a, u[i])
         if not ok:
             return i
         w += dw
@@ -172,13 +162,12 @@ def drive(p, u, f_out, k_out, w_out):
     return -1
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def virgin_tangent(p, s):
     """Tangent at the virgin state (u, f) = (0, 0) moving in direction s (eq. 16)."""
     row = branch_row(s)
-    fe, ke, _ = fe_ke(p, row, 0.0)
-    c = fe + s * p[row, F0]
-    return ke + p[row, KB] + s * p[row, ALPHA] * c
+    c, kc, _, _ = branch_eval(p.reshape((1, 2, 8)), 0, row, s, 0.0)
+    return kc + s * p[row, ALPHA] * c
 
 
 # --------------------------------------------------------------------------
@@ -199,6 +188,19 @@ def limiting_curve(p: np.ndarray, s: int, u) -> np.ndarray:
     return c
 
 
+def limiting_slope(p: np.ndarray, s: int, u) -> np.ndarray:
+    """dc_s/du = kb_s + ke_s(u), eq. 17."""
+    row = LOADING if s > 0 else UNLOADING
+    kb, f0, _, b1, b2, g1, g2, g3 = p[row]
+    u = np.asarray(u, dtype=float)
+    k = kb + 0.0 * u
+    if b1 != 0.0 and b2 != 0.0:
+        k = k + b1 * b2 * np.exp(b2 * u)
+    if g1 != 0.0 and g2 != 0.0:
+        k = k + g1 * g2 / np.cosh(0.5 * g2 * (u - g3)) ** 2
+    return k
+
+
 def reversal_stiffness(p: np.ndarray, u=0.0) -> float:
     """Largest tangent at a reversal at displacement u: kb_s + ke_s + alpha_s * gap.
 
@@ -207,10 +209,9 @@ def reversal_stiffness(p: np.ndarray, u=0.0) -> float:
     """
     gap = float(limiting_curve(p, 1, u) - limiting_curve(p, -1, u))
     ks = []
-    for s in (1.0, -1.0):
-        row = branch_row(s)
-        _, ke, _ = fe_ke(p, row, float(u))
-        ks.append(ke + p[row, KB] + p[row, ALPHA] * gap)
+    for s, row in ((1.0, LOADING), (-1.0, UNLOADING)):
+        kc = limiting_slope(p, s, u)
+        ks.append(kc + p[row, ALPHA] * gap)
     return max(ks)
 
 

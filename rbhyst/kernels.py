@@ -28,12 +28,16 @@ UNRESOLVED = 1  # the stiffness needs more substeps than allowed
 OVERFLOW = 2  # an element left its calibrated range (exp overflow)
 NONFINITE = 3  # a NaN or Inf appeared in the state
 
+# element state columns: displacement, force, branch sign, gap, tangent, antiderivative
+U, F, S, G, K, A = range(6)
+N_STATE = 6
+
 # info layout
 I_STATUS, I_ELEMENT, I_TIME, I_STIFFNESS, I_OMEGA, I_SUBSTEPS, I_LEVEL, I_OMEGA_DT = range(8)
 INFO_SIZE = 8
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def sym3_max_eig(a11, a22, a33, a12, a13, a23):
     """Largest eigenvalue of a symmetric 3x3 matrix (trigonometric closed form)."""
     p1 = a12 * a12 + a13 * a13 + a23 * a23
@@ -52,11 +56,13 @@ def sym3_max_eig(a11, a22, a33, a12, a13, a23):
     return q + 2.0 * p * math.cos(phi)
 
 
-@njit(cache=True)
-def update_elements(bvec, mult, params, q, ue, fe, se, ge, ke, un, fn, sn, gn, kn, kpeak, r):
-    """Elements at the new configuration q (eqs. 5-11): fills the new element state,
-    the peak tangent over the step (kpeak) and the restoring force r = sum b f.
+@njit(cache=True, error_model="numpy", inline="always")
+def update_elements(bvec, mult, params, q, es, en, kpeak, r):
+    """Elements at the new configuration q (eqs. 5-11).
 
+    es: (ne, 6) element state at the start of the step (columns U, F, S, G, K, A,
+    see hysteresis.vrm_update); en receives the new state, kpeak the largest
+    tangent over the step, r the restoring force sum mult b f.
     Returns (ok, bad element, work of all element forces over the step).
     """
     r[0] = 0.0
@@ -64,26 +70,30 @@ def update_elements(bvec, mult, params, q, ue, fe, se, ge, ke, un, fn, sn, gn, k
     r[2] = 0.0
     work = 0.0
     for e in range(bvec.shape[0]):
-        b = bvec[e]
-        u = b[0] * q[0] + b[1] * q[1] + b[2] * q[2]
-        f, s, g, k, kstart, w, ok = vrm_update(params[e], ue[e], fe[e], se[e], ge[e], ke[e], u)
+        b0 = bvec[e, 0]
+        b1 = bvec[e, 1]
+        b2 = bvec[e, 2]
+        u = b0 * q[0] + b1 * q[1] + b2 * q[2]
+        f, s, g, k, a, kstart, w, ok = vrm_update(params, e, es[e, U], es[e, F], es[e, S], es[e, G],
+                                                  es[e, K], es[e, A], u)
         if not ok:
             return False, e, work
-        un[e] = u
-        fn[e] = f
-        sn[e] = s
-        gn[e] = g
-        kn[e] = k
+        en[e, U] = u
+        en[e, F] = f
+        en[e, S] = s
+        en[e, G] = g
+        en[e, K] = k
+        en[e, A] = a
         kpeak[e] = max(kstart, k)
         m = mult[e]
         work += m * w
-        r[0] += m * b[0] * f
-        r[1] += m * b[1] * f
-        r[2] += m * b[2] * f
+        r[0] += m * b0 * f
+        r[1] += m * b1 * f
+        r[2] += m * b2 * f
     return True, -1, work
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy", inline="always")
 def omega_squared(bvec, mult, kpeak, wgt):
     """Trace bound on omega_max^2 = max eig(M^-1 K), K = sum mult k b b^T (k >= 0).
 
@@ -102,7 +112,7 @@ def omega_squared(bvec, mult, kpeak, wgt):
     return trace, worst
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def omega_squared_exact(bvec, mult, minv, kpeak):
     """max eig(M^-1/2 K M^-1/2), the exact omega_max^2 of the tangent system."""
     s11 = s22 = s33 = s12 = s13 = s23 = 0.0
@@ -122,27 +132,26 @@ def omega_squared_exact(bvec, mult, minv, kpeak):
     return sym3_max_eig(s11, s22, s33, s12, s13, s23)
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def _matvec(A, x, out):
     for i in range(3):
         out[i] = A[i, 0] * x[0] + A[i, 1] * x[1] + A[i, 2] * x[2]
 
 
-@njit(cache=True)
-def step_newmark_explicit(coef, minv, bvec, mult, params, d, v, a, p1, h,
-                          ue, fe, se, ge, ke, un, fn, sn, gn, kn, kpeak, d1, v1, a1, r, tmp):
-    """Chang's explicit method (coef[0] = B1, coef[1] = B2) or central difference
-    (B1 = I, B2 = I/2):
+@njit(cache=True, error_model="numpy", inline="always")
+def step_newmark_explicit(coef, lv, minv, bvec, mult, params, d, v, a, p1, h, es, en, kpeak, d1, v1, a1, r):
+    """One step of Chang's explicit method (coef[lv, 0] = B1, coef[lv, 1] = B2) or of
+    central difference (B1 = I, B2 = I/2):
 
         d+ = d + h B1 v + h^2 B2 a,  M a+ = p+ - R(d+),  v+ = v + h/2 (a + a+).
+
+    Returns (ok, bad element, element work over the step).
     """
-    _matvec(coef[0], v, tmp)
+    hh = h * h
     for i in range(3):
-        d1[i] = d[i] + h * tmp[i]
-    _matvec(coef[1], a, tmp)
-    for i in range(3):
-        d1[i] += h * h * tmp[i]
-    ok, bad, work = update_elements(bvec, mult, params, d1, ue, fe, se, ge, ke, un, fn, sn, gn, kn, kpeak, r)
+        d1[i] = (d[i] + h * (coef[lv, 0, i, 0] * v[0] + coef[lv, 0, i, 1] * v[1] + coef[lv, 0, i, 2] * v[2])
+                 + hh * (coef[lv, 1, i, 0] * a[0] + coef[lv, 1, i, 1] * a[1] + coef[lv, 1, i, 2] * a[2]))
+    ok, bad, work = update_elements(bvec, mult, params, d1, es, en, kpeak, r)
     if not ok:
         return False, bad, 0.0
     for i in range(3):
@@ -151,7 +160,23 @@ def step_newmark_explicit(coef, minv, bvec, mult, params, d, v, a, p1, h,
     return True, -1, work
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy", inline="always")
+def _copy2(src, dst):
+    for i in range(src.shape[0]):
+        for j in range(src.shape[1]):
+            dst[i, j] = src[i, j]
+
+
+@njit(cache=True, error_model="numpy")
+def _fail(info, status, element, t, substeps, level):
+    info[I_STATUS] = status
+    info[I_ELEMENT] = element
+    info[I_TIME] = t
+    info[I_SUBSTEPS] = substeps
+    info[I_LEVEL] = level
+
+
+@njit(cache=True, error_model="numpy")
 def run(method, coef, minv, bvec, mult, params, load, h_c, nsub_c, n_steps, every,
         omega_dt_limit, max_level, d, v, a,
         out_d, out_v, out_a, out_u, out_f, out_e, info):
@@ -160,41 +185,28 @@ def run(method, coef, minv, bvec, mult, params, load, h_c, nsub_c, n_steps, ever
     load: (n_steps * nsub_c + 1, 3) generalized load on the compute grid of step h_c.
     out_*: rows at every ``every``-th output step, row 0 being t = 0.
     out_e columns: input energy, kinetic energy, hysteretic work (cumulative).
+    Returns the number of rows written after row 0; info tells how it ended.
     """
     ne = bvec.shape[0]
     mass = 1.0 / minv
     wgt = np.empty(ne)
     for e in range(ne):
         wgt[e] = bvec[e, 0] ** 2 * minv[0] + bvec[e, 1] ** 2 * minv[1] + bvec[e, 2] ** 2 * minv[2]
-    # virgin elements: u = f = 0 and no branch yet (s = 0), so the first move
+    # virgin elements: u = f = 0 and no branch yet (S = 0), so the first move
     # starts a branch whatever its direction
-    ue = np.zeros(ne)
-    fe = np.zeros(ne)
-    se = np.zeros(ne)
-    ge = np.zeros(ne)
-    ke = np.zeros(ne)
-    un = np.empty(ne)
-    fn = np.empty(ne)
-    sn = np.empty(ne)
-    gn = np.empty(ne)
-    kn = np.empty(ne)
+    es = np.zeros((ne, N_STATE))
+    en = np.zeros((ne, N_STATE))
+    es_save = np.zeros((ne, N_STATE))
     kpeak = np.empty(ne)
     d1 = np.empty(3)
     v1 = np.empty(3)
     a1 = np.empty(3)
     r = np.zeros(3)
-    tmp = np.empty(3)
     p0 = np.empty(3)
     p1 = np.empty(3)
-    # state at the start of the compute step, to restart it with smaller substeps
-    d_s = np.empty(3)
-    v_s = np.empty(3)
-    a_s = np.empty(3)
-    ue_s = np.empty(ne)
-    fe_s = np.empty(ne)
-    se_s = np.empty(ne)
-    ge_s = np.empty(ne)
-    ke_s = np.empty(ne)
+    d_save = np.empty(3)
+    v_save = np.empty(3)
+    a_save = np.empty(3)
 
     e_in = 0.0
     e_hyst = 0.0
@@ -203,121 +215,86 @@ def run(method, coef, minv, bvec, mult, params, load, h_c, nsub_c, n_steps, ever
     level = 0
     omega_dt_seen = 0.0
     row = 0
+    limit2 = omega_dt_limit * omega_dt_limit
 
-    # row 0: the initial state
     for i in range(3):
         out_d[0, i] = d[i]
         out_v[0, i] = v[i]
         out_a[0, i] = a[i]
-    for e in range(ne):
-        out_u[0, e] = 0.0
-        out_f[0, e] = 0.0
-    out_e[0, 0] = 0.0
     out_e[0, 1] = 0.5 * (mass[0] * v[0] ** 2 + mass[1] * v[1] ** 2 + mass[2] * v[2] ** 2)
-    out_e[0, 2] = 0.0
 
-    n_compute = n_steps * nsub_c
     per_row = nsub_c * every
-    for j in range(n_compute):
-        # save the state to restart this compute step if a substep is rejected
+    for j in range(n_steps * nsub_c):
+        # keep the state to restart this compute step if a substep is rejected
         for i in range(3):
-            d_s[i] = d[i]
-            v_s[i] = v[i]
-            a_s[i] = a[i]
-        for e in range(ne):
-            ue_s[e] = ue[e]
-            fe_s[e] = fe[e]
-            se_s[e] = se[e]
-            ge_s[e] = ge[e]
-            ke_s[e] = ke[e]
-        e_in_s = e_in
-        e_hyst_s = e_hyst
+            d_save[i] = d[i]
+            v_save[i] = v[i]
+            a_save[i] = a[i]
+        _copy2(es, es_save)
+        e_in_save = e_in
+        e_hyst_save = e_hyst
         level = max(level - 1, 0)
         while True:
             nsub = 1 << level
-            h = h_c / nsub
-            cl = coef[level]
+            inv_nsub = 1.0 / nsub
+            h = h_c * inv_nsub
             accepted = True
             for k in range(nsub):
-                # load at both ends of the substep, linear within the compute step
-                w0 = k / nsub
-                w1 = (k + 1) / nsub
+                # load at the ends of the substep, linear within the compute step
+                w0 = k * inv_nsub
+                w1 = (k + 1) * inv_nsub
                 for i in range(3):
-                    p0[i] = (1.0 - w0) * load[j, i] + w0 * load[j + 1, i]
-                    p1[i] = (1.0 - w1) * load[j, i] + w1 * load[j + 1, i]
+                    p0[i] = load[j, i] + w0 * (load[j + 1, i] - load[j, i])
+                    p1[i] = load[j, i] + w1 * (load[j + 1, i] - load[j, i])
                 if method == CHANG or method == CENTRAL_DIFFERENCE:
-                    ok, bad, work = step_newmark_explicit(
-                        cl, minv, bvec, mult, params, d, v, a, p1, h,
-                        ue, fe, se, ge, ke, un, fn, sn, gn, kn, kpeak, d1, v1, a1, r, tmp)
+                    ok, bad, work = step_newmark_explicit(coef, level, minv, bvec, mult, params, d, v, a, p1, h,
+                                                          es, en, kpeak, d1, v1, a1, r)
                 else:
-                    ok, bad, work = False, -2, 0.0
+                    ok, bad, work = False, -1, 0.0
                 t_now = (j + w1) * h_c
                 if not ok:
-                    info[I_STATUS] = OVERFLOW if bad >= 0 else NONFINITE
-                    info[I_ELEMENT] = bad
-                    info[I_TIME] = t_now
-                    info[I_SUBSTEPS] = substeps
-                    info[I_LEVEL] = level_used
+                    _fail(info, OVERFLOW if bad >= 0 else NONFINITE, bad, t_now, substeps, level_used)
                     return row
+                # resolution check on the stiffest instantaneous mode of the step
                 lam, worst = omega_squared(bvec, mult, kpeak, wgt)
-                if lam * h * h > omega_dt_limit * omega_dt_limit:
+                if lam * h * h > limit2:
                     lam = omega_squared_exact(bvec, mult, minv, kpeak)
+                    if lam * h * h > limit2:
+                        if level >= max_level:
+                            _fail(info, UNRESOLVED, worst, t_now, substeps, level_used)
+                            info[I_STIFFNESS] = kpeak[worst]
+                            info[I_OMEGA] = math.sqrt(lam)
+                            return row
+                        accepted = False
+                        break
                 omega_dt = math.sqrt(max(lam, 0.0)) * h
-                if omega_dt > omega_dt_limit:
-                    if level >= max_level:
-                        info[I_STATUS] = UNRESOLVED
-                        info[I_ELEMENT] = worst
-                        info[I_TIME] = t_now
-                        info[I_STIFFNESS] = kpeak[worst]
-                        info[I_OMEGA] = math.sqrt(lam)
-                        info[I_SUBSTEPS] = substeps
-                        info[I_LEVEL] = level_used
-                        return row
-                    accepted = False
-                    break
                 if omega_dt > omega_dt_seen:
                     omega_dt_seen = omega_dt
-                # accept the substep
                 for i in range(3):
                     e_in += 0.5 * (p0[i] + p1[i]) * (d1[i] - d[i])
                     d[i] = d1[i]
                     v[i] = v1[i]
                     a[i] = a1[i]
                 e_hyst += work
-                for e in range(ne):
-                    ue[e] = un[e]
-                    fe[e] = fn[e]
-                    se[e] = sn[e]
-                    ge[e] = gn[e]
-                    ke[e] = kn[e]
+                _copy2(en, es)
             if accepted:
                 if level > 0:
                     substeps += nsub
-                    if level > level_used:
-                        level_used = level
+                    level_used = max(level_used, level)
                 break
             # restart the compute step with twice as many substeps
             for i in range(3):
-                d[i] = d_s[i]
-                v[i] = v_s[i]
-                a[i] = a_s[i]
-            for e in range(ne):
-                ue[e] = ue_s[e]
-                fe[e] = fe_s[e]
-                se[e] = se_s[e]
-                ge[e] = ge_s[e]
-                ke[e] = ke_s[e]
-            e_in = e_in_s
-            e_hyst = e_hyst_s
+                d[i] = d_save[i]
+                v[i] = v_save[i]
+                a[i] = a_save[i]
+            _copy2(es_save, es)
+            e_in = e_in_save
+            e_hyst = e_hyst_save
             level += 1
 
         if not (math.isfinite(d[0]) and math.isfinite(d[1]) and math.isfinite(d[2])
                 and math.isfinite(a[0]) and math.isfinite(a[1]) and math.isfinite(a[2])):
-            info[I_STATUS] = NONFINITE
-            info[I_ELEMENT] = -1
-            info[I_TIME] = (j + 1) * h_c
-            info[I_SUBSTEPS] = substeps
-            info[I_LEVEL] = level_used
+            _fail(info, NONFINITE, -1, (j + 1) * h_c, substeps, level_used)
             return row
 
         if (j + 1) % per_row == 0:
@@ -327,8 +304,8 @@ def run(method, coef, minv, bvec, mult, params, load, h_c, nsub_c, n_steps, ever
                 out_v[row, i] = v[i]
                 out_a[row, i] = a[i]
             for e in range(ne):
-                out_u[row, e] = ue[e]
-                out_f[row, e] = fe[e]
+                out_u[row, e] = es[e, U]
+                out_f[row, e] = es[e, F]
             out_e[row, 0] = e_in
             out_e[row, 1] = 0.5 * (mass[0] * v[0] ** 2 + mass[1] * v[1] ** 2 + mass[2] * v[2] ** 2)
             out_e[row, 2] = e_hyst
