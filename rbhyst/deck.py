@@ -63,10 +63,11 @@ class HysteresisSet(_Model):
     def _curves_ordered(self):
         p = self.array()
         gap = float(limiting_curve(p, 1, 0.0) - limiting_curve(p, -1, 0.0))
-        if not gap > 0.0:
+        if not gap >= 0.0:
             raise ValueError(
-                f"the limiting curves cross at u = 0: c+(0) - c-(0) = {gap:.6g} must be > 0 "
-                "(with equal other parameters: f0 of loading + f0 of unloading > 0)"
+                f"the limiting curves cross at u = 0: c+(0) - c-(0) = {gap:.6g} must be >= 0 "
+                "(with equal other parameters: f0 of loading + f0 of unloading >= 0; "
+                "equal curves make a nonlinear elastic element)"
             )
         return self
 
