@@ -101,6 +101,157 @@ def run(
         f"peaks |u1| = {pk['u1_m']:.4g} m, |u2| = {pk['u2_m']:.4g} m, |theta3| = {pk['theta3_rad']:.4g} rad")
     say(f"wrote {target}")
 
+@app.command("calibrate-plot")
+def calibrate_plot(
+    deck: Annotated[Path, typer.Argument(help="TOML or YAML deck with [hysteresis.*] sets (and optionally [loops]).")],
+    sets: Annotated[Optional[list[str]], typer.Option("--set", help="Only this set (repeatable; default: all).")] = None,
+    data: Annotated[Optional[Path], typer.Option(
+        help="Measured loop (CSV, displacement and force columns with units in the header): "
+             "impose its displacement history and report the fit.")] = None,
+    u_units: Annotated[Optional[str], typer.Option(help="Displacement units of --data (m, cm, mm, ...).")] = None,
+    f_units: Annotated[Optional[str], typer.Option(help="Force units of --data (N, kN, ...).")] = None,
+    out: Annotated[Optional[Path], typer.Option(
+        "--out", help="Output folder (default: results/<deck stem>-loops/ beside the deck).")] = None,
+):
+    """Force-displacement loops of VRM sets: loops.png, loops_<set>.csv, summary.json (fit.json with --data)."""
+    from .calibration import header, loop_result, protocol, safe_names, write_json, write_loop_csv
+    from .deck import load_deck
+    from .outdir import staged_directory
+    from .testdata import read_loop_data
+
+    with user_errors():
+        d = load_deck(deck)
+        names = _chosen_sets(deck, d, sets)
+        if data is not None:
+            measured = read_loop_data(data, u_units, f_units)
+            u, f_data = measured.u, measured.f
+        else:
+            if u_units is not None or f_units is not None:
+                raise InputError("--u-units/--f-units: only with --data")
+            measured, f_data = None, None
+            _, u = protocol(d.loops)
+        results = [loop_result(n, d.hysteresis[n].array(), u, f_data) for n in names]
+        summary = {**header("calibrate-plot"), "deck": deck.name,
+                   "data": None if measured is None else measured.name,
+                   "protocol": None if measured is not None else (d.loops.model_dump() if d.loops else "default"),
+                   "sets": {r.name: r.summary() for r in results}}
+        target = out if out is not None else deck.parent / "results" / f"{deck.stem}-loops"
+        files = safe_names(names)
+        with staged_directory(target) as tmp:
+            for r in results:
+                write_loop_csv(r, tmp / f"loops_{files[r.name]}.csv")
+            write_json(summary, tmp / "summary.json")
+            if measured is not None:
+                write_json({**header("calibrate-plot"), "deck": deck.name, "data": measured.name,
+                            "sets": {r.name: {"nrmse": r.nrmse, "r2": r.r2,
+                                              "hysteretic_work_J": float(r.work[-1]),
+                                              "dissipated_per_cycle_J": r.dissipated} for r in results}},
+                           tmp / "fit.json")
+            from .report.loops import plot_loops
+
+            plot_loops(results, tmp / "loops.png", title=d.title)
+    for r in results:
+        fit = f"NRMSE {r.nrmse:.3%}, R^2 {r.r2:.5f}; " if r.f_data is not None else ""
+        ed = r.dissipated
+        cyc = f"{len(ed)} closed cycle{'s' if len(ed) != 1 else ''}, last dissipates {ed[-1]:.6g} J" if ed \
+            else "no closed cycle"
+        say(f"{r.name}: {fit}hysteretic work {r.work[-1]:.6g} J, {cyc}")
+    say(f"wrote {target}")
+
+
+@app.command()
+def calibrate(
+    data: Annotated[Path, typer.Argument(help="Measured loop: CSV with displacement and force columns, units in the header.")],
+    set_name: Annotated[str, typer.Option("--set", help="The set to identify (its name in --init).")],
+    init: Annotated[Path, typer.Option(help="Deck holding the starting values of the set.")],
+    free: Annotated[Optional[list[str]], typer.Option(
+        help="Parameters to fit (repeatable or comma-separated): loading.kb, kb+, kb- or kb for both "
+             "branches. Default: all 16.")] = None,
+    fix: Annotated[Optional[list[str]], typer.Option(help="Parameters to keep at their --init values.")] = None,
+    starts: Annotated[int, typer.Option(min=1, help="Number of starts (the first is --init).")] = 6,
+    seed: Annotated[int, typer.Option(help="Random seed for the extra starts.")] = 0,
+    u_units: Annotated[Optional[str], typer.Option(help="Displacement units if the header has none.")] = None,
+    f_units: Annotated[Optional[str], typer.Option(help="Force units if the header has none.")] = None,
+    out: Annotated[Optional[Path], typer.Option(
+        "--out", help="Output folder (default: results/<data stem>-calibrate/ beside the data).")] = None,
+):
+    """Identify a VRM set from measured loops: fitted.toml (deck fragment), fit.json, loops.png."""
+    import tomllib
+
+    from .calibration import (NAMES, deck_fragment, fit_set, header, loop_result, parameters_dict,
+                              parse_names, round_set, safe_names, write_json, write_loop_csv)
+    from .deck import load_deck, parse_deck
+    from .outdir import staged_directory
+    from .testdata import read_loop_data
+
+    with user_errors():
+        d = load_deck(init)
+        _chosen_sets(init, d, [set_name])
+        measured = read_loop_data(data, u_units, f_units)
+        chosen = parse_names(free, "--free") if free else list(range(16))
+        fixed = parse_names(fix, "--fix") if fix else []
+        chosen = [i for i in chosen if i not in fixed]
+        p0 = d.hysteresis[set_name].array()
+        fit = fit_set(p0, measured.u, measured.f, chosen, starts=starts, seed=seed)
+        p = round_set(fit.p)
+        res = loop_result(set_name, p, measured.u, measured.f)
+        fragment = deck_fragment(
+            set_name, p,
+            f"VRM set fitted by rbhyst calibrate to {measured.name} ({measured.u.size} samples):\n"
+            f"NRMSE {res.nrmse:.3%}, R^2 {res.r2:.5f}. Paste into a deck as it is.")
+        try:
+            parse_deck(tomllib.loads(fragment))
+        except InputError as err:
+            raise AnalysisError(f"calibration failed: the fitted set is not a valid deck set: {err.problems[0]}") \
+                from None
+        report = {
+            **header("calibrate"), "data": measured.name, "data_units": [measured.u_units, measured.f_units],
+            "samples": int(measured.u.size), "init": init.name, "set": set_name,
+            "free": [NAMES[i] for i in fit.free], "starts": starts, "seed": seed,
+            "parameters": parameters_dict(p),
+            "nrmse": res.nrmse, "r2": res.r2, "iterations": fit.njev, "function_evaluations": fit.nfev,
+            "status": fit.status, "message": fit.message, "wall_s": fit.wall_s,
+            "parameter_table": fit.parameters(),
+            "hysteretic_work_J": float(res.work[-1]), "dissipated_per_cycle_J": res.dissipated,
+            "cycles": [c.as_dict() for c in res.cycles],
+            "start_log": fit.starts,
+        }
+        target = out if out is not None else data.parent / "results" / f"{data.stem}-calibrate"
+        with staged_directory(target) as tmp:
+            (tmp / "fitted.toml").write_text(fragment, encoding="utf-8")
+            write_json(report, tmp / "fit.json")
+            write_loop_csv(res, tmp / f"loops_{safe_names([set_name])[set_name]}.csv")
+            from .report.loops import plot_loops
+
+            plot_loops([res], tmp / "loops.png", initial={set_name: p0},
+                       title=f"{set_name} fitted to {measured.name}")
+    undetermined = [r["name"] for r in fit.parameters() if r["free"] and not r["determined"]]
+    say(f"{set_name}: NRMSE {res.nrmse:.3%}, R^2 {res.r2:.5f}; {len(fit.free)} free parameters, "
+        f"{fit.njev} iterations, {len(fit.starts)} starts in {fit.wall_s:.3g} s")
+    if undetermined:
+        say(f"note: the data do not pin down (standard error > 10% or at a bound): {', '.join(undetermined)}")
+    if fit.status == 0:
+        say("note: the best start stopped at the evaluation limit; more --starts may help")
+    if res.nrmse > POOR_FIT_NRMSE:
+        say(f"warning: NRMSE {res.nrmse:.1%} is above {POOR_FIT_NRMSE:.0%}: the set does not follow the data; "
+            "look at loops.png, try another --init or free more parameters")
+    say(f"wrote {target}")
+
+
+#: NRMSE above which ``calibrate`` warns that the fit does not follow the data
+POOR_FIT_NRMSE = 0.05
+
+
+def _chosen_sets(deck_path: Path, deck, names: list[str] | None) -> list[str]:
+    """The --set names (all sets when none), or InputError naming the unknown ones."""
+    if not names:
+        return list(deck.hysteresis)
+    unknown = [n for n in names if n not in deck.hysteresis]
+    if unknown:
+        raise InputError(f"{deck_path}: --set {', '.join(repr(n) for n in unknown)}: no such set; "
+                         f"defined: {', '.join(deck.hysteresis)}")
+    return list(dict.fromkeys(names))
+
 
 @app.command("make-record")
 def make_record(

@@ -1,0 +1,77 @@
+"""Force-displacement loops of VRM sets, one panel per set (seed Fig. 2 / Fig. 4 style)."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+
+from ..calibration import LoopResult
+from ..hysteresis import limiting_curve
+from ._style import plt, save
+
+
+def _display_units(u_max: float, f_max: float) -> tuple[str, float, str, float]:
+    """Readable units for data in m and N: mm below 0.1 m, kN from 1 kN."""
+    u_unit, u_fac = ("mm", 1e3) if u_max < 0.1 else ("m", 1.0)
+    f_unit, f_fac = ("kN", 1e-3) if f_max >= 1e3 else ("N", 1.0)
+    return u_unit, u_fac, f_unit, f_fac
+
+
+def plot_loops(results: list[LoopResult], path: Path, title: str | None = None,
+               initial: dict[str, np.ndarray] | None = None) -> None:
+    """Model loops (and measured ones when present) with the limiting curves c+ and c-.
+
+    ``initial`` maps set names to a parameter set drawn as a dotted line (the starting
+    point of a calibration).
+    """
+    n = len(results)
+    cols = 1 if n == 1 else 2
+    rows = math.ceil(n / cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(4.6 * cols, 3.9 * rows), squeeze=False)
+    for k, (ax, res) in enumerate(zip(axes.flat, results)):
+        f_all = res.f if res.f_data is None else np.concatenate([res.f, res.f_data])
+        u_unit, u_fac, f_unit, f_fac = _display_units(float(np.max(np.abs(res.u))), float(np.max(np.abs(f_all))))
+        ug = np.linspace(res.u.min(), res.u.max(), 400)
+        for s, ls in ((1, "--"), (-1, ":")):
+            with np.errstate(over="ignore"):
+                c = limiting_curve(res.p, s, ug)
+            ax.plot(ug * u_fac, c * f_fac, ls, color="0.55", lw=0.9, label=f"c{'+' if s > 0 else '-'}(u)")
+        if res.f_data is not None:
+            ax.plot(res.u * u_fac, res.f_data * f_fac, color="0.15", lw=0.8, alpha=0.8, label="test data")
+        if initial is not None and res.name in initial:
+            from ..hysteresis import loop
+
+            try:
+                f0 = loop(initial[res.name], res.u)[0]
+                ax.plot(res.u * u_fac, f0 * f_fac, color="C1", lw=0.8, ls="-.", label="initial set")
+            except OverflowError:
+                pass
+        ax.plot(res.u * u_fac, res.f * f_fac, color="C0", lw=1.3, label="VRM")
+        lo, hi = f_all.min(), f_all.max()
+        pad = 0.08 * (hi - lo if hi > lo else 1.0)
+        ax.set_ylim((lo - pad) * f_fac, (hi + pad) * f_fac)
+        ax.set_xlabel(f"u [{u_unit}]")
+        ax.set_ylabel(f"f [{f_unit}]")
+        if n > 1:
+            ax.set_title(f"({chr(ord('a') + k)}) {res.name}", fontsize=9)
+        elif not title:
+            ax.set_title(res.name, fontsize=9)
+        lines = []
+        if res.f_data is not None:
+            lines.append(f"NRMSE {res.nrmse:.2%}, R² {res.r2:.4f}")
+        closed = [c for c in res.cycles if c.closed]
+        if closed:
+            lines.append(f"E_D {closed[-1].work:.4g} J/cycle (last closed)")
+        if lines:
+            ax.text(0.03, 0.97, "\n".join(lines), transform=ax.transAxes, va="top", fontsize=7.5,
+                    bbox=dict(boxstyle="round,pad=0.3", fc="white", ec="0.8", alpha=0.9))
+        ax.axhline(0.0, color="0.6", lw=0.5)
+        ax.axvline(0.0, color="0.6", lw=0.5)
+        ax.legend(loc="lower right", fontsize=7, framealpha=0.9)
+    for ax in axes.flat[n:]:
+        ax.set_visible(False)
+    if title:
+        fig.suptitle(title, fontsize=10)
+    save(fig, path)
