@@ -273,6 +273,9 @@ def _messages(err: ValidationError) -> list[str]:
             msg = "unknown key"
         elif e["type"] == "missing":
             msg = "required key is missing"
+        elif e["type"] == "union_tag_invalid":
+            msg = (f"unknown type {e['ctx']['tag']!r}: use type = \"sine\", or give `file` "
+                   "(and no type) for a record")
         lines.append(f"{_format_loc(e['loc'])}: {msg}")
     return list(dict.fromkeys(lines))
 
