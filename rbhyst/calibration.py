@@ -172,6 +172,24 @@ def loop_result(name: str, p: np.ndarray, u: np.ndarray, f_data: np.ndarray | No
                       cycles_of(u, f, w), f_data)
 
 
+def check_orientation(u: np.ndarray, f: np.ndarray, where: str = "data") -> None:
+    """InputError when the measured loops give out energy (net work of the force < 0).
+
+    A hysteretic element dissipates: with u across and f up its loops run clockwise
+    (loading along the top). Loops run the other way mean a sign convention is
+    reversed (force or displacement, not both). The net work is taken between the
+    first and the last displacement maximum.
+    """
+    rev = significant_reversals(u)
+    peaks = [i for i in rev if i + 1 < u.size and u[i] >= u[i + 1]]
+    a, b = (peaks[0], peaks[-1]) if len(peaks) >= 2 else (0, u.size - 1)
+    w = float(np.sum(0.5 * (f[a + 1:b + 1] + f[a:b]) * np.diff(u[a:b + 1])))
+    scale = float(np.ptp(u) * np.ptp(f))
+    if w < -1e-3 * scale:
+        raise InputError(f"{where}: the loops run counter-clockwise (net work {w:.4g} J: the element would give "
+                         "out energy); is the sign of the force or of the displacement reversed?")
+
+
 def parameters_dict(p: np.ndarray) -> dict:
     return {b: {k: float(p[r, c]) for c, k in enumerate(PARAMS)} for r, b in enumerate(BRANCHES)}
 
@@ -374,6 +392,7 @@ def fit_set(p0: np.ndarray, u: np.ndarray, f: np.ndarray, free: list[int] | None
     F = 0.5 * float(np.ptp(f))
     if not (U > 0 and F > 0):
         raise InputError("data: the displacement and the force must both vary")
+    check_orientation(u, f)
     scale = scales(U, F)
     x_all = p0.ravel() / scale
     lo, hi = np.tile(_LOWER, 2), np.tile(_UPPER, 2)
@@ -461,7 +480,7 @@ def fit_set(p0: np.ndarray, u: np.ndarray, f: np.ndarray, free: list[int] | None
                   if finite else log[-1]["message"] if log else "no start")
         raise AnalysisError(f"calibration failed: none of {len(candidates)} starts gave a set with "
                             f"ordered limiting curves c+ > c- ({detail}); try another --init, "
-                            "more --starts or fewer --free parameters")
+                            "more --starts or other --free parameters")
 
     e, res, p = best
     std = np.full(16, np.nan)

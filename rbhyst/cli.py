@@ -178,8 +178,8 @@ def calibrate(
     """Identify a VRM set from measured loops: fitted.toml (deck fragment), fit.json, loops.png."""
     import tomllib
 
-    from .calibration import (NAMES, deck_fragment, fit_set, header, loop_result, parameters_dict,
-                              parse_names, round_set, safe_names, write_json, write_loop_csv)
+    from .calibration import (NAMES, check_orientation, deck_fragment, fit_set, header, loop_result,
+                              parameters_dict, parse_names, round_set, safe_names, write_json, write_loop_csv)
     from .deck import load_deck, parse_deck
     from .outdir import staged_directory
     from .testdata import read_loop_data
@@ -188,6 +188,7 @@ def calibrate(
         d = load_deck(init)
         _chosen_sets(init, d, [set_name])
         measured = read_loop_data(data, u_units, f_units)
+        check_orientation(measured.u, measured.f, str(data))
         chosen = parse_names(free, "--free") if free else list(range(16))
         fixed = parse_names(fix, "--fix") if fix else []
         chosen = [i for i in chosen if i not in fixed]
