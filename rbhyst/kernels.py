@@ -21,20 +21,27 @@ from .hysteresis import vrm_update
 # method ids (see integrators/__init__.py)
 CHANG = 0
 CENTRAL_DIFFERENCE = 1
+NEWMARK = 2  # average acceleration, implicit: Newton iterations with the VRM tangent
+KR_ALPHA = 3  # Kolay-Ricles alpha family, explicit
 
 # status codes written to info[0]
 OK = 0
 UNRESOLVED = 1  # the stiffness needs more substeps than allowed
 OVERFLOW = 2  # an element left its calibrated range (exp overflow)
 NONFINITE = 3  # a NaN or Inf appeared in the state
+NOT_CONVERGED = 4  # Newton iterations failed even at the finest substep level
+
+#: "bad element" a step returns when its Newton iterations did not converge:
+#: the loop retries the compute step with twice the substeps
+NEWTON_FAILED = -2
 
 # element state columns: displacement, force, branch sign, gap, tangent, antiderivative
 U, F, S, G, K, A = range(6)
 N_STATE = 6
 
 # info layout
-I_STATUS, I_ELEMENT, I_TIME, I_STIFFNESS, I_OMEGA, I_SUBSTEPS, I_LEVEL, I_OMEGA_DT = range(8)
-INFO_SIZE = 8
+I_STATUS, I_ELEMENT, I_TIME, I_STIFFNESS, I_OMEGA, I_SUBSTEPS, I_LEVEL, I_OMEGA_DT, I_STEPS, I_ITER = range(10)
+INFO_SIZE = 10  # I_STEPS: substeps taken in all; I_ITER: Newton iterations in all (newmark)
 
 
 @njit(cache=True, error_model="numpy")
@@ -178,13 +185,15 @@ def _fail(info, status, element, t, substeps, level):
 
 @njit(cache=True, error_model="numpy")
 def run(method, coef, minv, bvec, mult, params, load, h_c, nsub_c, n_steps, every,
-        omega_dt_limit, max_level, d, v, a,
+        omega_dt_limit, min_level, max_level, d, v, a,
         out_d, out_v, out_a, out_u, out_f, out_e, info):
     """Integrate from the state (d, v, a) at t = 0 over n_steps output steps.
 
     load: (n_steps * nsub_c + 1, 3) generalized load on the compute grid of step h_c.
     out_*: rows at every ``every``-th output step, row 0 being t = 0.
     out_e columns: input energy, kinetic energy, hysteretic work (cumulative).
+    Every compute step is split into at least 2**min_level substeps (a structure-
+    dependent method needs omega_0 h within the limit too, see simulate.min_level).
     Returns the number of rows written after row 0; info tells how it ended.
     """
     ne = bvec.shape[0]
@@ -233,7 +242,7 @@ def run(method, coef, minv, bvec, mult, params, load, h_c, nsub_c, n_steps, ever
         _copy2(es, es_save)
         e_in_save = e_in
         e_hyst_save = e_hyst
-        level = max(level - 1, 0)
+        level = max(level - 1, min_level)
         while True:
             nsub = 1 << level
             inv_nsub = 1.0 / nsub

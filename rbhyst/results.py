@@ -40,6 +40,7 @@ class Result:
     energy: np.ndarray  # (n, 3) input, kinetic, hysteretic (cumulative)
     steps: int
     record_substeps: int = 1  # compute steps per dt to follow a finer record
+    min_substep_level: int = 0  # every step split in 2**this for omega_0 h (structure-dependent methods)
     substeps: int = 0  # extra substeps taken where the stiffness needed them
     max_substep_level: int = 0
     max_omega_dt: float = 0.0
@@ -98,8 +99,8 @@ class Result:
             },
             "elements": [
                 {"x_m": list(el.x), "angle_deg": el.angle_deg, "hysteresis": el.hysteresis,
-                 "count": el.count, "k0_N_m": float(k)}
-                for el, k in zip(self.system.elements, self.system.k0)
+                 "count": el.count, "k0_N_m": float(k), "k_reversal_N_m": float(kr)}
+                for el, k, kr in zip(self.system.elements, self.system.k0, self.system.k_reversal)
             ],
             "analysis": {
                 "integrator": self.settings.integrator,
@@ -109,6 +110,7 @@ class Result:
                 "output_every": self.settings.every,
                 "record_substeps": self.record_substeps,
                 "stiffness_substeps": self.substeps,
+                "k0_substep_level": self.min_substep_level,
                 "max_substep_level": self.max_substep_level,
                 "max_omega_dt": self.max_omega_dt,
                 "max_omega_dt_limit": self.settings.max_omega_dt,

@@ -54,6 +54,7 @@ def simulate(system: System, s: Settings) -> Result:
     k0 = system.K0
     coef = np.stack([method.coefficients(system.mass, k0, h_c / 2**lv)
                      for lv in range(s.max_substep_level + 1)])
+    level0 = min_level(system, s, method, h_c)
 
     d = np.zeros(3)
     v = np.zeros(3)
@@ -69,10 +70,10 @@ def simulate(system: System, s: Settings) -> Result:
     info = np.zeros(kernels.INFO_SIZE)
     args = (method.kernel_id, coef, minv, np.ascontiguousarray(system.bvec), system.mult,
             np.ascontiguousarray(system.params), load, h_c, nsub, n_steps, s.every,
-            s.max_omega_dt, s.max_substep_level, d, v, a,
+            s.max_omega_dt, level0, s.max_substep_level, d, v, a,
             out_d, out_v, out_a, out_u, out_f, out_e, info)
     # load (or compile) the kernel before the clock starts: wall_s is time stepping only
-    kernels.run(*args[:9], 0, *args[10:])
+    kernels.run(*args[:9], 0, *args[10:])  # n_steps = 0
     start = time.perf_counter()
     kernels.run(*args)
     wall = time.perf_counter() - start
@@ -93,11 +94,33 @@ def simulate(system: System, s: Settings) -> Result:
         energy=out_e,
         steps=n_steps,
         record_substeps=nsub,
+        min_substep_level=level0,
         substeps=int(info[kernels.I_SUBSTEPS]),
         max_substep_level=int(info[kernels.I_LEVEL]),
         max_omega_dt=float(info[kernels.I_OMEGA_DT]),
         wall_s=wall,
     )
+
+
+def min_level(system: System, s: Settings, method, h: float) -> int:
+    """Substep level that a structure-dependent method needs for omega_0 h <= the limit.
+
+    Chang's displacement predictor scales the step's motion by (1 + (omega_0 h)^2 / 4)^-1
+    where the tangent is softer than K0: accurate only while omega_0 h is small, whatever
+    the current stiffness. omega_0^2 = max eig(M^-1 K0).
+    """
+    if not method.structure_dependent:
+        return 0
+    m = 1.0 / np.sqrt(system.mass)
+    w0 = float(np.sqrt(np.max(np.linalg.eigvalsh(system.K0 * np.outer(m, m)))))
+    level = max(0, math.ceil(math.log2(w0 * h / s.max_omega_dt))) if w0 * h > s.max_omega_dt else 0
+    if level > s.max_substep_level:
+        raise AnalysisError(
+            f"omega_0 = {w0:.4g} rad/s of K0 (the elements' stiffness at a reversal) needs steps of "
+            f"{s.max_omega_dt / w0:.3g} s with {s.integrator!r}: more than {2**s.max_substep_level} "
+            f"substeps of dt = {s.dt:g} s; reduce dt"
+        )
+    return level
 
 
 def _element_name(system: System, e: int) -> str:

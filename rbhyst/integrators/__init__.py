@@ -22,6 +22,8 @@ class Method:
     order: int
     explicit: bool
     kernel_id: int | None = None
+    #: the step depends on K0 (Chang, Chen-Ricles, KR-alpha): omega_0 h must stay resolved
+    structure_dependent: bool = False
     #: (mass (3,), K0 (3, 3), h) -> (N_COEF, 3, 3)
     coefficients: Callable[[np.ndarray, np.ndarray, float], np.ndarray] | None = None
     #: (system, dt, options) -> Result, for methods outside the fixed-step loop

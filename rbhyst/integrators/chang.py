@@ -29,5 +29,6 @@ METHOD = Method(
     order=2,
     explicit=True,
     kernel_id=kernels.CHANG,
+    structure_dependent=True,
     coefficients=coefficients,
 )
