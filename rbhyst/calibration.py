@@ -461,7 +461,7 @@ def fit_set(p0: np.ndarray, u: np.ndarray, f: np.ndarray, free: list[int] | None
     for k, xs in enumerate(candidates, start=1):
         try:
             res = least_squares(residuals, xs, jac=jacobian, bounds=(lo_f, hi_f), method="trf", x_scale=1.0,
-                                max_nfev=max_nfev or 25 * len(free))
+                                tr_solver="lsmr", max_nfev=max_nfev or 25 * len(free))
         except (ValueError, np.linalg.LinAlgError) as exc:
             log.append({"start": k, "nrmse": None, "status": -1, "message": str(exc)})
             continue
@@ -483,6 +483,20 @@ def fit_set(p0: np.ndarray, u: np.ndarray, f: np.ndarray, free: list[int] | None
                             "more --starts or other --free parameters")
 
     e, res, p = best
+    # polish the best start with the exact trust-region solver (an SVD per iteration, which
+    # the starts avoid: it is slow on a busy machine) for a sharp optimum and Jacobian
+    try:
+        polished = least_squares(residuals, res.x, jac=jacobian, bounds=(lo_f, hi_f), method="trf",
+                                 x_scale=1.0, tr_solver="exact", max_nfev=5 * len(free),
+                                 ftol=1e-10, xtol=1e-10, gtol=1e-14)
+    except (ValueError, np.linalg.LinAlgError):
+        polished = None
+    if polished is not None and polished.cost <= res.cost:
+        pp = assemble(polished.x)
+        fm = _force(pp, u)
+        if curves_ordered(pp, grid) and fm is not None:
+            res = _merge_counts(polished, res)
+            e, p = nrmse(fm, f), pp
     std = np.full(16, np.nan)
     std[free] = _standard_errors(res.jac[:n] * math.sqrt(n), res.fun[:n] * math.sqrt(n), len(free)) * scale[free]
     at_bound = np.zeros(16, dtype=bool)
@@ -491,6 +505,16 @@ def fit_set(p0: np.ndarray, u: np.ndarray, f: np.ndarray, free: list[int] | None
     return Fit(p=p, free=free, nrmse=e, r2=r_squared(fm, f), nfev=int(res.nfev), njev=int(res.njev or 0),
                status=int(res.status), message=res.message, std=std, at_bound=at_bound, starts=log,
                wall_s=time.perf_counter() - t0)
+
+
+def _merge_counts(polished, start):
+    """The polished result, counting the evaluations of the start it came from as well; a
+    polish cut short by its evaluation limit keeps the start's own termination status."""
+    polished.nfev = int(polished.nfev) + int(start.nfev)
+    polished.njev = int(polished.njev or 0) + int(start.njev or 0)
+    if polished.status == 0:
+        polished.status, polished.message = start.status, start.message
+    return polished
 
 
 def _force(p, u):

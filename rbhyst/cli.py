@@ -103,7 +103,7 @@ def run(
 
 @app.command("calibrate-plot")
 def calibrate_plot(
-    deck: Annotated[Path, typer.Argument(help="TOML or YAML deck with [hysteresis.*] sets (and optionally [loops]).")],
+    deck: Annotated[Path, typer.Argument(help="TOML or YAML deck with hysteresis sets (and optionally a loops table).")],
     sets: Annotated[Optional[list[str]], typer.Option("--set", help="Only this set (repeatable; default: all).")] = None,
     data: Annotated[Optional[Path], typer.Option(
         help="Measured loop (CSV, displacement and force columns with units in the header): "
@@ -194,7 +194,7 @@ def calibrate(
         chosen = [i for i in chosen if i not in fixed]
         p0 = d.hysteresis[set_name].array()
         fit = fit_set(p0, measured.u, measured.f, chosen, starts=starts, seed=seed)
-        p = round_set(fit.p)
+        p = fit.p = round_set(fit.p)  # what fitted.toml holds: every number reported is for it
         res = loop_result(set_name, p, measured.u, measured.f)
         fragment = deck_fragment(
             set_name, p,
