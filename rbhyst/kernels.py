@@ -16,7 +16,7 @@ import math
 import numpy as np
 from numba import njit
 
-from .hysteresis import vrm_update
+from .hysteresis import virgin_tangent, vrm_update
 
 # method ids (see integrators/__init__.py)
 CHANG = 0
@@ -202,8 +202,12 @@ def run(method, coef, minv, bvec, mult, params, load, h_c, nsub_c, n_steps, ever
     for e in range(ne):
         wgt[e] = bvec[e, 0] ** 2 * minv[0] + bvec[e, 1] ** 2 * minv[1] + bvec[e, 2] ** 2 * minv[2]
     # virgin elements: u = f = 0 and no branch yet (S = 0), so the first move
-    # starts a branch whatever its direction
+    # starts a branch whatever its direction; until it moves, an element's tangent
+    # is the stiffer of its two first moves, so the monitor sees a stiff body at
+    # rest before the first step that moves it (a zero start moves nothing)
     es = np.zeros((ne, N_STATE))
+    for e in range(ne):
+        es[e, K] = max(virgin_tangent(params[e], 1.0), virgin_tangent(params[e], -1.0))
     en = np.zeros((ne, N_STATE))
     es_save = np.zeros((ne, N_STATE))
     kpeak = np.empty(ne)
