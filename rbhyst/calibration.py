@@ -555,7 +555,6 @@ def _standard_errors(jac: np.ndarray, r: np.ndarray, k: int) -> np.ndarray:
     s2 = float(r @ r) / max(n - k, 1)
     _, sv, vt = np.linalg.svd(jac, full_matrices=False)
     tiny = sv <= 1e-10 * sv[0] if sv.size and sv[0] > 0 else np.ones_like(sv, dtype=bool)
-    var = np.zeros(vt.shape[1])
     with np.errstate(divide="ignore"):
         inv_s2 = np.where(tiny, 0.0, 1.0 / np.where(tiny, 1.0, sv) ** 2)
     var = (vt.T ** 2) @ inv_s2 * s2

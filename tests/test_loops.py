@@ -17,7 +17,7 @@ from typer.testing import CliRunner
 from rbhyst.calibration import cycles_of, loop_result, protocol
 from rbhyst.cli import app
 from rbhyst.deck import Loops, load_deck
-from rbhyst.hysteresis import limiting_curve, parameter_set
+from rbhyst.hysteresis import limiting_curve
 
 DECKS = Path(__file__).resolve().parents[1] / "decks"
 FIG2 = DECKS / "seed_fig2_loops.toml"
