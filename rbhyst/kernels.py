@@ -31,6 +31,9 @@ OVERFLOW = 2  # an element left its calibrated range (exp overflow)
 NONFINITE = 3  # a NaN or Inf appeared in the state
 NOT_CONVERGED = 4  # Newton iterations failed even at the finest substep level
 
+#: (8 eps)^2: a Newton correction below 8 ulps of d+ is converged whatever the increment
+ROUNDOFF2 = (8.0 * 2.220446049250313e-16) ** 2
+
 #: "bad element" a step returns when its Newton iterations did not converge:
 #: the loop retries the compute step with twice the substeps
 NEWTON_FAILED = -2
@@ -168,6 +171,121 @@ def step_newmark_explicit(coef, lv, minv, bvec, mult, params, d, v, a, p1, h, es
 
 
 @njit(cache=True, error_model="numpy", inline="always")
+def step_kr_alpha(coef, lv, minv, bvec, mult, params, d, v, a, p0, p1, h, es, en, kpeak, d1, v1, a1, r):
+    """One step of the KR-alpha method (Kolay and Ricles 2014), v being the velocity at t:
+
+        d+ = d + h v + h^2 C1 a
+        M (I - A3) a+ = p(t+ - af) - R(+ - af) - M A3 a,  x(+ - af) = (1 - af) x+ + af x
+        v+ = v + h C0 a + h gamma a+
+
+    coef[lv]: 0 = A1 - gamma I, 1 = A2 - gamma I, 2 = Mh^-1 M A3, 3 = (1 - af) Mh^-1,
+    4 = af Mh^-1, 5 = gamma I, Mh = M (I - A3) (see integrators/kr_alpha.py). ``a`` is
+    the method's own acceleration variable; R at the start of the step comes from es.
+    Returns (ok, bad element, element work over the step).
+    """
+    rn0 = 0.0
+    rn1 = 0.0
+    rn2 = 0.0
+    for e in range(bvec.shape[0]):
+        mf = mult[e] * es[e, F]
+        rn0 += mf * bvec[e, 0]
+        rn1 += mf * bvec[e, 1]
+        rn2 += mf * bvec[e, 2]
+    hh = h * h
+    for i in range(3):
+        d1[i] = d[i] + h * v[i] + hh * (coef[lv, 1, i, 0] * a[0] + coef[lv, 1, i, 1] * a[1]
+                                        + coef[lv, 1, i, 2] * a[2])
+    ok, bad, work = update_elements(bvec, mult, params, d1, es, en, kpeak, r)
+    if not ok:
+        return False, bad, 0.0
+    x0 = p1[0] - r[0]
+    x1 = p1[1] - r[1]
+    x2 = p1[2] - r[2]
+    y0 = p0[0] - rn0
+    y1 = p0[1] - rn1
+    y2 = p0[2] - rn2
+    for i in range(3):
+        a1[i] = (coef[lv, 3, i, 0] * x0 + coef[lv, 3, i, 1] * x1 + coef[lv, 3, i, 2] * x2
+                 + coef[lv, 4, i, 0] * y0 + coef[lv, 4, i, 1] * y1 + coef[lv, 4, i, 2] * y2
+                 - (coef[lv, 2, i, 0] * a[0] + coef[lv, 2, i, 1] * a[1] + coef[lv, 2, i, 2] * a[2]))
+    for i in range(3):
+        v1[i] = v[i] + h * (coef[lv, 0, i, 0] * a[0] + coef[lv, 0, i, 1] * a[1] + coef[lv, 0, i, 2] * a[2]
+                            + coef[lv, 5, i, 0] * a1[0] + coef[lv, 5, i, 1] * a1[1] + coef[lv, 5, i, 2] * a1[2])
+    return True, -1, work
+
+
+@njit(cache=True, error_model="numpy", inline="always")
+def step_newmark_implicit(mass, bvec, mult, params, d, v, a, p1, h, es, en, kpeak, d1, v1, a1, r,
+                          tol, max_iter):
+    """One step of Newmark's average acceleration method (gamma = 1/2, beta = 1/4):
+
+        M a+ + R(d+) = p+,  a+ = 4/h^2 (d+ - d - h v) - a,  v+ = v + h/2 (a + a+)
+
+    solved for d+ by Newton iterations from d + h v + h^2/2 a. The Jacobian is
+    4/h^2 M + K_t(d+), K_t = sum mult k_t b b^T with each element's closed-form
+    tangent (seed eq. 16) at the trial point on the branch from its start state;
+    the 3x3 system is solved by Cramer's rule. Converged when the Newton correction
+    is at most tol times the step's increment (both in the norm sqrt(x^T M x)), or
+    below the round-off of d+ itself; the accepted iterate is the last one evaluated,
+    so en, r and the work belong to d+.
+    Returns (ok, bad element or NEWTON_FAILED, element work, iterations).
+    """
+    c = 4.0 / (h * h)
+    for i in range(3):
+        d1[i] = d[i] + h * v[i] + 0.5 * h * h * a[i]
+    for it in range(max_iter):
+        ok, bad, work = update_elements(bvec, mult, params, d1, es, en, kpeak, r)
+        if not ok:
+            return False, bad, 0.0, it + 1
+        k11 = c * mass[0]
+        k22 = c * mass[1]
+        k33 = c * mass[2]
+        k12 = 0.0
+        k13 = 0.0
+        k23 = 0.0
+        for e in range(bvec.shape[0]):
+            k = mult[e] * en[e, K]
+            b0 = bvec[e, 0]
+            b1 = bvec[e, 1]
+            b2 = bvec[e, 2]
+            k11 += k * b0 * b0
+            k22 += k * b1 * b1
+            k33 += k * b2 * b2
+            k12 += k * b0 * b1
+            k13 += k * b0 * b2
+            k23 += k * b1 * b2
+        g0 = mass[0] * (c * (d1[0] - d[0] - h * v[0]) - a[0]) + r[0] - p1[0]
+        g1 = mass[1] * (c * (d1[1] - d[1] - h * v[1]) - a[1]) + r[1] - p1[1]
+        g2 = mass[2] * (c * (d1[2] - d[2] - h * v[2]) - a[2]) + r[2] - p1[2]
+        c11 = k22 * k33 - k23 * k23
+        c12 = k13 * k23 - k12 * k33
+        c13 = k12 * k23 - k13 * k22
+        c22 = k11 * k33 - k13 * k13
+        c23 = k12 * k13 - k11 * k23
+        c33 = k11 * k22 - k12 * k12
+        det = k11 * c11 + k12 * c12 + k13 * c13
+        x0 = -(c11 * g0 + c12 * g1 + c13 * g2) / det
+        x1 = -(c12 * g0 + c22 * g1 + c23 * g2) / det
+        x2 = -(c13 * g0 + c23 * g1 + c33 * g2) / det
+        corr = mass[0] * x0 * x0 + mass[1] * x1 * x1 + mass[2] * x2 * x2
+        incr = (mass[0] * (d1[0] - d[0]) ** 2 + mass[1] * (d1[1] - d[1]) ** 2
+                + mass[2] * (d1[2] - d[2]) ** 2)
+        # round-off floor: d+ itself is known to a few ulps only (a slow step's increment is tiny)
+        floor = ROUNDOFF2 * (mass[0] * d1[0] * d1[0] + mass[1] * d1[1] * d1[1] + mass[2] * d1[2] * d1[2])
+        if corr <= tol * tol * incr + floor:
+            for i in range(3):
+                a1[i] = c * (d1[i] - d[i] - h * v[i]) - a[i]
+                v1[i] = v[i] + 0.5 * h * (a[i] + a1[i])
+            return True, -1, work, it + 1
+        if not corr < math.inf:  # NaN or Inf: a singular Jacobian or a runaway iterate
+            return False, NEWTON_FAILED, 0.0, it + 1
+        d1[0] += x0
+        d1[1] += x1
+        d1[2] += x2
+    return False, NEWTON_FAILED, 0.0, max_iter
+
+
+@njit(cache=True, error_model="numpy", inline="always")
 def _copy2(src, dst):
     for i in range(src.shape[0]):
         for j in range(src.shape[1]):
@@ -186,7 +304,7 @@ def _fail(info, status, element, t, substeps, level):
 @njit(cache=True, error_model="numpy")
 def run(method, coef, minv, bvec, mult, params, load, h_c, nsub_c, n_steps, every,
         omega_dt_limit, min_level, max_level, d, v, a,
-        out_d, out_v, out_a, out_u, out_f, out_e, info):
+        out_d, out_v, out_a, out_u, out_f, out_e, info, newton_tol, newton_max_iter):
     """Integrate from the state (d, v, a) at t = 0 over n_steps output steps.
 
     load: (n_steps * nsub_c + 1, 3) generalized load on the compute grid of step h_c.
@@ -194,6 +312,8 @@ def run(method, coef, minv, bvec, mult, params, load, h_c, nsub_c, n_steps, ever
     out_e columns: input energy, kinetic energy, hysteretic work (cumulative).
     Every compute step is split into at least 2**min_level substeps (a structure-
     dependent method needs omega_0 h within the limit too, see simulate.min_level).
+    newton_tol, newton_max_iter: the implicit method's convergence test and iteration cap;
+    a step whose iterations fail is retried, like a stiff one, with twice the substeps.
     Returns the number of rows written after row 0; info tells how it ended.
     """
     ne = bvec.shape[0]
@@ -223,6 +343,8 @@ def run(method, coef, minv, bvec, mult, params, load, h_c, nsub_c, n_steps, ever
 
     e_in = 0.0
     e_hyst = 0.0
+    steps_taken = 0
+    iterations = 0
     substeps = 0
     level_used = 0
     level = 0
@@ -262,11 +384,26 @@ def run(method, coef, minv, bvec, mult, params, load, h_c, nsub_c, n_steps, ever
                 if method == CHANG or method == CENTRAL_DIFFERENCE:
                     ok, bad, work = step_newmark_explicit(coef, level, minv, bvec, mult, params, d, v, a, p1, h,
                                                           es, en, kpeak, d1, v1, a1, r)
+                elif method == KR_ALPHA:
+                    ok, bad, work = step_kr_alpha(coef, level, minv, bvec, mult, params, d, v, a, p0, p1, h,
+                                                  es, en, kpeak, d1, v1, a1, r)
+                elif method == NEWMARK:
+                    ok, bad, work, its = step_newmark_implicit(mass, bvec, mult, params, d, v, a, p1, h,
+                                                               es, en, kpeak, d1, v1, a1, r,
+                                                               newton_tol, newton_max_iter)
+                    iterations += its
                 else:
                     ok, bad, work = False, -1, 0.0
+                steps_taken += 1
                 t_now = (j + w1) * h_c
                 if not ok:
-                    _fail(info, OVERFLOW if bad >= 0 else NONFINITE, bad, t_now, substeps, level_used)
+                    if bad == NEWTON_FAILED and level < max_level:
+                        accepted = False  # retry the compute step with twice the substeps
+                        break
+                    if bad == NEWTON_FAILED:
+                        _fail(info, NOT_CONVERGED, -1, t_now, substeps, level_used)
+                    else:
+                        _fail(info, OVERFLOW if bad >= 0 else NONFINITE, bad, t_now, substeps, level_used)
                     return row
                 # resolution check on the stiffest instantaneous mode of the step
                 lam, worst = omega_squared(bvec, mult, kpeak, wgt)
@@ -316,6 +453,10 @@ def run(method, coef, minv, bvec, mult, params, load, h_c, nsub_c, n_steps, ever
                 out_d[row, i] = d[i]
                 out_v[row, i] = v[i]
                 out_a[row, i] = a[i]
+            if method == KR_ALPHA:
+                # its acceleration variable is a(t) + O(h): report equilibrium at d instead
+                for i in range(3):
+                    out_a[row, i] = minv[i] * (load[j + 1, i] - r[i])
             for e in range(ne):
                 out_u[row, e] = es[e, U]
                 out_f[row, e] = es[e, F]
@@ -327,4 +468,6 @@ def run(method, coef, minv, bvec, mult, params, load, h_c, nsub_c, n_steps, ever
     info[I_SUBSTEPS] = substeps
     info[I_LEVEL] = level_used
     info[I_OMEGA_DT] = omega_dt_seen
+    info[I_STEPS] = steps_taken
+    info[I_ITER] = iterations
     return row

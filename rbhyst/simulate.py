@@ -24,6 +24,9 @@ class Settings:
     every: int = 1
     max_omega_dt: float = 0.5
     max_substep_level: int = 12
+    #: newmark: Newton correction <= newton_tol x the step's increment, at most newton_max_iter iterations
+    newton_tol: float = 1e-10
+    newton_max_iter: int = 20
 
 
 def grid(system: System, s: Settings) -> tuple[int, int]:
@@ -71,7 +74,7 @@ def simulate(system: System, s: Settings) -> Result:
     args = (method.kernel_id, coef, minv, np.ascontiguousarray(system.bvec), system.mult,
             np.ascontiguousarray(system.params), load, h_c, nsub, n_steps, s.every,
             s.max_omega_dt, level0, s.max_substep_level, d, v, a,
-            out_d, out_v, out_a, out_u, out_f, out_e, info)
+            out_d, out_v, out_a, out_u, out_f, out_e, info, s.newton_tol, s.newton_max_iter)
     # load (or compile) the kernel before the clock starts: wall_s is time stepping only
     kernels.run(*args[:9], 0, *args[10:])  # n_steps = 0
     start = time.perf_counter()
@@ -150,6 +153,12 @@ def _raise_on_failure(system: System, s: Settings, info: np.ndarray, nsub: int) 
             f"(omega_max = {omega:.4g} rad/s), which {2**s.max_substep_level} substeps of "
             f"dt = {s.dt:g} s cannot resolve; a step of {s.max_omega_dt / omega:.3g} s "
             "would (or raise analysis.max_substep_level)"
+        )
+    if status == kernels.NOT_CONVERGED:
+        raise AnalysisError(
+            f"t = {t:.6g} s: Newton iterations of {s.integrator!r} did not converge to "
+            f"{s.newton_tol:g} in {s.newton_max_iter} iterations, even with {2**s.max_substep_level} "
+            f"substeps of dt = {s.dt:g} s; reduce dt or use an explicit integrator"
         )
     raise AnalysisError(
         f"t = {t:.6g} s: the solution is no longer finite (NaN or Inf); the scene is numerically "

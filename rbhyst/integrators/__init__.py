@@ -12,7 +12,7 @@ from typing import Callable
 
 import numpy as np
 
-N_COEF = 4  # coefficient matrices per substep level
+N_COEF = 6  # coefficient matrices per substep level
 
 
 @dataclass(frozen=True)
@@ -31,9 +31,9 @@ class Method:
 
 
 def _registry() -> dict[str, Method]:
-    from . import central_difference, chang
+    from . import central_difference, chang, kr_alpha, newmark, reference
 
-    methods = (chang.METHOD, central_difference.METHOD)
+    methods = (chang.METHOD, central_difference.METHOD, newmark.METHOD, kr_alpha.METHOD, reference.METHOD)
     return {m.name: m for m in methods}
 
 
