@@ -22,10 +22,10 @@ static int branch_eval(const double *p, double s, double u, double *c, double *k
     if (b1 != 0.0 && b2 != 0.0) {
         double x = b2 * u;
         if (x > 700.0) return 0;
-        double e = exp(x);
-        *c += b1 * (e - 1.0);
-        *kc += b1 * b2 * e;
-        *big += b1 * (e / b2 - u);
+        double em = expm1(x);
+        *c += b1 * em;
+        *kc += b1 * b2 * (em + 1.0);
+        *big += b1 * (em / b2 - u);
     }
     double g1 = p[GAMMA1], g2 = p[GAMMA2];
     if (g1 != 0.0 && g2 != 0.0) {
@@ -33,8 +33,14 @@ static int branch_eval(const double *p, double s, double u, double *c, double *k
         double t = tanh(x);
         *c += 2.0 * g1 * t;
         *kc += g1 * g2 * (1.0 - t * t);
-        double ax = fabs(x);
-        *big += 4.0 * g1 / g2 * (ax + log1p(exp(-2.0 * ax)));
+        double ax = fabs(x), lc;
+        if (ax < 0.5) {
+            double sh = sinh(0.5 * ax);
+            lc = log1p(2.0 * sh * sh);
+        } else {
+            lc = ax + log1p(exp(-2.0 * ax)) - log(2.0);
+        }
+        *big += 4.0 * g1 / g2 * lc;
     }
     return 1;
 }

@@ -74,9 +74,9 @@ def run(
         d = load_deck(deck)
         settings = settings_from_deck(d, integrator=integrator, dt=dt)
         system = assemble(d, deck.parent)
-        for note in system.notes:
-            say(f"note: {note}")
         result = simulate(system, settings)
+        for note in system.notes:  # after the run: a failing deck gets its error lines alone
+            say(f"note: {note}")
         if result.record_substeps > 1:
             say(f"note: a record is sampled finer than dt = {settings.dt:g} s: "
                 f"{result.record_substeps} substeps per step follow it (output stays on dt)")

@@ -197,23 +197,22 @@ class Deck(_Model):
     output: Output = Output()
     loops: Loops | None = None
 
-    @model_validator(mode="after")
-    def _cross_references(self):
-        problems = []
-        for k, el in enumerate(self.elements or [], start=1):
-            if el.hysteresis not in self.hysteresis:
-                problems.append(
-                    f"elements[{k}].hysteresis: undefined set {el.hysteresis!r}; "
-                    f"defined: {', '.join(sorted(self.hysteresis))}"
-                )
-            if el.vertex is not None and self.body is not None and el.vertex > len(self.body.vertices):
-                problems.append(
-                    f"elements[{k}].vertex: {el.vertex} is out of range: the body has "
-                    f"{len(self.body.vertices)} vertices"
-                )
-        if problems:
-            raise InputError(problems)
-        return self
+
+def cross_references(deck: Deck) -> list[str]:
+    """Problems that span sections: undefined sets, vertex indices out of range."""
+    problems = []
+    for k, el in enumerate(deck.elements or [], start=1):
+        if el.hysteresis not in deck.hysteresis:
+            problems.append(
+                f"elements[{k}].hysteresis: undefined set {el.hysteresis!r}; "
+                f"defined: {', '.join(sorted(deck.hysteresis))}"
+            )
+        if el.vertex is not None and deck.body is not None and el.vertex > len(deck.body.vertices):
+            problems.append(
+                f"elements[{k}].vertex: {el.vertex} is out of range: the body has "
+                f"{len(deck.body.vertices)} vertices"
+            )
+    return problems
 
 
 def check_runnable(deck: Deck) -> None:
@@ -285,9 +284,13 @@ def parse_deck(data: Any) -> Deck:
     if not isinstance(data, dict):
         raise InputError("(deck): the top level must be a table of keys")
     try:
-        return Deck.model_validate(data)
+        deck = Deck.model_validate(data)
     except ValidationError as err:
         raise InputError(_messages(err)) from None
+    problems = cross_references(deck)
+    if problems:
+        raise InputError(problems)
+    return deck
 
 
 def read_mapping(path: Path) -> dict:

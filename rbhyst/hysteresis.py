@@ -36,6 +36,7 @@ LOADING, UNLOADING = 0, 1
 #: Largest beta2*u for which exp() is finite with room to spare: beyond it an
 #: element has left any range it could have been calibrated on.
 EXP_ARG_MAX = 700.0
+LN2 = math.log(2.0)
 
 
 def parameter_set(loading: dict, unloading: dict) -> np.ndarray:
@@ -76,10 +77,11 @@ def branch_eval(p, e, row, s, u):
         x = b2 * u
         if x > EXP_ARG_MAX:
             return c, kc, big, False
-        ex = math.exp(x)
-        c += b1 * (ex - 1.0)
-        kc += b1 * b2 * ex
-        big += b1 * (ex / b2 - u)
+        # expm1 keeps c and C_s exact as beta2 -> 0 (C_s = b1 (expm1(b2 u)/b2 - u) -> 0)
+        em = math.expm1(x)
+        c += b1 * em
+        kc += b1 * b2 * (em + 1.0)
+        big += b1 * (em / b2 - u)
     g1 = p[e, row, GAMMA1]
     g2 = p[e, row, GAMMA2]
     if g1 != 0.0 and g2 != 0.0:
@@ -87,9 +89,15 @@ def branch_eval(p, e, row, s, u):
         t = math.tanh(x)
         c += 2.0 * g1 * t
         kc += g1 * g2 * (1.0 - t * t)
-        # d/du (4 g1 / g2) log cosh(x) = 2 g1 tanh(x)
+        # d/du (4 g1 / g2) log cosh(x) = 2 g1 tanh(x); log cosh without cancellation
+        # for small x (gamma2 -> 0 multiplies it by 4 g1 / g2) and without overflow for large
         ax = abs(x)
-        big += 4.0 * g1 / g2 * (ax + math.log1p(math.exp(-2.0 * ax)))
+        if ax < 0.5:
+            sh = math.sinh(0.5 * ax)
+            lc = math.log1p(2.0 * sh * sh)
+        else:
+            lc = ax + math.log1p(math.exp(-2.0 * ax)) - LN2
+        big += 4.0 * g1 / g2 * lc
     return c, kc, big, True
 
 

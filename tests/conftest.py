@@ -47,8 +47,8 @@ def seed_deck(**analysis) -> dict:
     """The seed's scene (Table 2 body, Table 3 sets at P1 and P2) with a sine support motion."""
     deck = {
         "title": "seed scene",
-        "body": {"vertices": SEED_VERTICES, "mass": SEED_MASS},
-        "hysteresis": {"wri_axial": TABLE3_AXIAL, "wri_shear": TABLE3_SHEAR},
+        "body": {"vertices": copy.deepcopy(SEED_VERTICES), "mass": SEED_MASS},
+        "hysteresis": {"wri_axial": copy.deepcopy(TABLE3_AXIAL), "wri_shear": copy.deepcopy(TABLE3_SHEAR)},
         "elements": [
             {"vertex": 1, "angle_deg": 0.0, "hysteresis": "wri_axial", "count": 2},
             {"vertex": 1, "angle_deg": 90.0, "hysteresis": "wri_shear", "count": 2},
