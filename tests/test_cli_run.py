@@ -247,10 +247,16 @@ def test_unparsable_decks(tmp_path, name, text, expected):
     ("ragged record", "0,1\n0.01,2,3\n", "3 columns"),
     ("non-uniform time", "0,1\n0.01,2\n0.03,1\n", "not uniform"),
     ("broken at2", "HEADER\nNO COUNTS\n0.1 0.2\n", "NPTS"),
+    ("binary record", b"\x89PNG\r\n\x1a\n\xff\xfe\x00", "cannot be read"),
+    ("record is a folder", "folder", "cannot be read"),
 ])
 def test_bad_records(tmp_path, name, content, expected):
     fname = "rec.at2" if "at2" in name else "rec.csv"
-    if content is not None:
+    if content == "folder":
+        (tmp_path / fname).mkdir()
+    elif isinstance(content, bytes):
+        (tmp_path / fname).write_bytes(content)
+    elif content is not None:
         (tmp_path / fname).write_text(content)
     data = copy.deepcopy(seed_deck())
     data["excitation"]["support"]["x1"] = {"file": fname, "units": "g"}
