@@ -94,7 +94,7 @@ def _load(t, k, brk, pcoef, out):
         out[c] = acc
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit(cache=True, error_model="numpy")
 def _rhs(t, y, k, brk, pcoef, minv, bvec, mult, params, s, up, gp, p, dy):
     """dy = (v, M^-1 (p - R), p . v); returns the first element that overflowed, or -1."""
     _load(t, k, brk, pcoef, p)
@@ -456,7 +456,7 @@ def _integrate(minv, bvec, mult, params, brk, pcoef, t_out, rtol, atol, s_init, 
     return io
 
 
-@njit(cache=True, error_model="numpy", inline="always")
+@njit(cache=True, error_model="numpy")
 def _dense_coefficients(t, hh, y, y_new, f, f_new, k, brk, pcoef, minv, bvec, mult, params, s, up, gp, p,
                         A, C, D, K, F, ytmp):
     """The three extra stages and the 7 rows of DOP853's dense output (as scipy's DOP853)."""
@@ -622,18 +622,25 @@ def _initial_branches(system, coef):
     return s.astype(float)
 
 
-def solve_with_stats(system, settings, rtol: float = RTOL) -> tuple[Result, dict]:
-    """The reference Result on the settings' output grid, and what it took (for study.json)."""
+def solve_with_stats(system, settings, rtol: float = RTOL, t_out: np.ndarray | None = None
+                     ) -> tuple[Result, dict]:
+    """The reference Result and what it took (for study.json).
+
+    Output at t_n = n dt every ``settings.every`` steps, or at the increasing times
+    ``t_out`` (from 0) if given: a study asks for the union of several grids.
+    """
     from ..simulate import grid
 
     n_steps, _ = grid(system, settings)
-    if n_steps < settings.every:
-        from ..errors import InputError
+    if t_out is None:
+        if n_steps < settings.every:
+            from ..errors import InputError
 
-        raise InputError(f"output.every: {settings.every} is more than the {n_steps} steps of the analysis")
-    t_end = n_steps * settings.dt
-    n_rows = n_steps // settings.every + 1
-    t_out = settings.dt * settings.every * np.arange(n_rows)
+            raise InputError(f"output.every: {settings.every} is more than the {n_steps} steps of the analysis")
+        t_out = settings.dt * settings.every * np.arange(n_steps // settings.every + 1)
+    t_out = np.ascontiguousarray(t_out, dtype=float)
+    t_end = float(t_out[-1])
+    n_rows = len(t_out)
     brk, coef = load_pieces(system, t_end)
     atol, length, w1 = _scales(system, brk, coef, rtol)
     s0 = _initial_branches(system, coef)
