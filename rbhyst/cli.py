@@ -254,6 +254,94 @@ def _chosen_sets(deck_path: Path, deck, names: list[str] | None) -> list[str]:
     return list(dict.fromkeys(names))
 
 
+def _split_list(text: str | None, what: str, convert=str) -> list | None:
+    if text is None:
+        return None
+    out = []
+    for tok in (t.strip() for t in text.split(",")):
+        if not tok:
+            continue
+        try:
+            out.append(convert(tok))
+        except ValueError:
+            raise InputError(f"{what}: {tok!r} is not a number") from None
+    return out
+
+
+@app.command()
+def study(
+    deck: Annotated[Path, typer.Argument(help="TOML or YAML deck.")],
+    integrators: Annotated[Optional[str], typer.Option(
+        "--integrators", help="Comma-separated integrators (default: every fixed-step one).")] = None,
+    dt: Annotated[Optional[str], typer.Option(
+        "--dt", help="Comma-separated time steps [s] (default: 4, 2, 1, 1/2, 1/4, 1/8 x the deck's dt).")] = None,
+    out: Annotated[Optional[Path], typer.Option(
+        "--out", help="Output folder (default: the deck's output folder + '-study').")] = None,
+    plots: Annotated[bool, typer.Option("--plots/--no-plots", help="Write PNG plots.")] = True,
+):
+    """Accuracy against cost: each integrator at each dt against a reference solution.
+
+    Writes study.csv (one row per run), study.json (observed orders, the reference's
+    settings) and error_vs_runtime.png / error_vs_dt.png.
+    """
+    from rich.console import Console
+    from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
+
+    from .deck import load_deck
+    from .model import assemble
+    from .outdir import staged_directory
+    from .simulate import grid, settings_from_deck
+    from .study import check_dts, check_integrators, fixed_step_names, run_study, write_csv, write_json
+
+    with user_errors():
+        d = load_deck(deck)
+        settings = settings_from_deck(d)
+        names = _split_list(integrators, "--integrators")
+        names = check_integrators(names if names is not None else fixed_step_names())
+        dts = _split_list(dt, "--dt", float)
+        system = assemble(d, deck.parent)
+        if dts is not None:
+            n_steps, _ = grid(system, settings)
+            check_dts(dts, n_steps * settings.dt)
+        console = Console(stderr=True)
+        columns = (TextColumn("{task.description:<40}"), BarColumn(), TextColumn("{task.completed}/{task.total}"),
+                   TimeElapsedColumn())
+        with Progress(*columns, console=console, transient=True, disable=not console.is_terminal) as bar:
+            task = bar.add_task("study", total=None)
+
+            def progress(label: str, done: int, total: int) -> None:
+                bar.update(task, description=label, completed=done, total=total)
+
+            result = run_study(system, settings, names, dts, progress=progress)
+        target = out if out is not None else _study_dir(d, deck)
+        with staged_directory(target) as tmp:
+            write_csv(result, tmp / "study.csv")
+            write_json(result, tmp / "study.json")
+            if plots and d.output.plots:
+                from .report.study import write_plots
+
+                write_plots(result, tmp)
+    ref = result.reference
+    say(f"reference: DOP853, rtol {ref['rtol']:g}: {ref['steps']} steps, {ref['reversals']} reversals "
+        f"in {ref['wall_s']:.3g} s")
+    for name in result.integrators:
+        order = result.orders[name].get("order")
+        at_deck = [r for r in result.runs if r.integrator == name and abs(r.dt - settings.dt) <= 1e-12 * settings.dt]
+        where = ""
+        if at_deck and at_deck[0].failed is None:
+            where = f"; at dt = {settings.dt:g} s: error {at_deck[0].err_max:.3g} in {at_deck[0].wall_s:.3g} s"
+        failed = sum(r.failed is not None for r in result.runs if r.integrator == name)
+        say(f"{name}: observed order {'n/a' if order is None else f'{order:.2f}'}{where}"
+            + (f"; {failed} run(s) failed (see study.json)" if failed else ""))
+    say(f"wrote {target}")
+
+
+def _study_dir(deck, deck_path: Path) -> Path:
+    """Beside the run's folder (a run replaces its folder whole): <output folder>-study."""
+    base = output_dir(deck, deck_path)
+    return base.with_name(base.name + "-study")
+
+
 @app.command("make-record")
 def make_record(
     out: Annotated[Path, typer.Argument(help="CSV file to write: time_s,acceleration.")],
