@@ -47,6 +47,7 @@ NP = 8  # load polynomial: degree NP - 1 on each piece
 MAX_PIECE = 0.02  # s, longest piece of the load before the fit check splits it
 FIT_TOL = 1e-12  # of the load's peak
 NS = 8  # samples of b . v per step when looking for a crossing
+SIMULTANEOUS = 1e-9  # reversals this close (fraction of the step) are one event
 MAX_STEPS = 50_000_000
 
 # DOP853 tables (12 stages, the 13th row is f at the end of the step, 3 more for dense output)
@@ -170,6 +171,7 @@ def _integrate(minv, bvec, mult, params, brk, pcoef, t_out, rtol, atol, s_init, 
     p = np.zeros(3)
     yo = np.zeros(NY)
     gs = np.zeros(NS + 1)
+    xroot = np.zeros(ne)  # where in the step each element reverses (2: not in this step)
     t = 0.0
     h = h_first
     io = 0
@@ -306,6 +308,7 @@ def _integrate(minv, bvec, mult, params, brk, pcoef, t_out, rtol, atol, s_init, 
                 n_fev += 3
                 have_dense = True
                 for e in range(ne):
+                    xroot[e] = 2.0
                     se = s[e]
                     gs[0] = se * (bvec[e, 0] * y[3] + bvec[e, 1] * y[4] + bvec[e, 2] * y[5])
                     gs[NS] = se * (bvec[e, 0] * y_new[3] + bvec[e, 1] * y_new[4] + bvec[e, 2] * y_new[5])
@@ -322,6 +325,7 @@ def _integrate(minv, bvec, mult, params, brk, pcoef, t_out, rtol, atol, s_init, 
                     if found < 0:
                         if not seen and gs[NS] < 0.0:
                             # moving against its branch from the very start: flip it at t
+                            xroot[e] = 0.0
                             if 0.0 < x_ev:
                                 x_ev = 0.0
                                 ev = e
@@ -356,13 +360,16 @@ def _integrate(minv, bvec, mult, params, brk, pcoef, t_out, rtol, atol, s_init, 
                                 ga *= 0.5
                             side = -1
                     xr = 0.5 * (xa + xb)
+                    xroot[e] = xr
                     if xr < x_ev:
                         x_ev = xr
                         ev = e
             if ev >= 0 and x_ev == 0.0:
                 # a branch chosen against the motion (a virgin element, or round-off at a reversal)
-                _new_branch(ev, y, bvec, params, s, up, gp, ap, wacc)
-                n_start += 1
+                for e in range(ne):
+                    if xroot[e] == 0.0:
+                        _new_branch(e, y, bvec, params, s, up, gp, ap, wacc)
+                        n_start += 1
                 bad = _rhs(t, y, k, brk, pcoef, minv, bvec, mult, params, s, up, gp, p, f)
                 n_fev += 1
                 if n_start > 100 * (n_ev + n_steps + 10):
@@ -405,8 +412,12 @@ def _integrate(minv, bvec, mult, params, brk, pcoef, t_out, rtol, atol, s_init, 
                 while io < n_out and t_out[io] <= t:
                     io = _write(io, t_out[io], k, y, brk, pcoef, minv, bvec, mult, params, s, up, gp, ap, wacc,
                                 p, out_y, out_a, out_eu, out_ef, out_eh)
-                _new_branch(ev, y, bvec, params, s, up, gp, ap, wacc)
-                n_ev += 1
+                # elements that reverse together (identical b and sets, or by chance within
+                # SIMULTANEOUS of the step) all start their new branches here
+                for e in range(ne):
+                    if xroot[e] <= x_ev + SIMULTANEOUS:
+                        _new_branch(e, y, bvec, params, s, up, gp, ap, wacc)
+                        n_ev += 1
                 n_steps += 1
                 bad = _rhs(t, y, k, brk, pcoef, minv, bvec, mult, params, s, up, gp, p, f)
                 n_fev += 1
