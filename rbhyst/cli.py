@@ -321,6 +321,8 @@ def study(
                 from .report.study import write_plots
 
                 write_plots(result, tmp)
+    for note in system.notes:
+        say(f"note: {note}")
     ref = result.reference
     say(f"reference: DOP853, rtol {ref['rtol']:g}: {ref['steps']} steps, {ref['reversals']} reversals "
         f"in {ref['wall_s']:.3g} s")
