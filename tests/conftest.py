@@ -99,3 +99,12 @@ def records_or_skip() -> Path:
     if not (RECORDS / "I-ELC180.AT2").exists():
         pytest.skip("the El Centro records (../shared/records) are not on this machine")
     return RECORDS
+
+
+# property tests draw the same examples on every CI run: a red CI is then a real regression,
+# not a lucky draw (locally they explore afresh each time)
+from hypothesis import settings as _hypothesis_settings  # noqa: E402
+
+_hypothesis_settings.register_profile("ci", derandomize=True, print_blob=True)
+if __import__("os").environ.get("CI"):
+    _hypothesis_settings.load_profile("ci")

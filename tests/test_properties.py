@@ -84,7 +84,9 @@ def test_random_valid_scenes_never_crash_and_keep_the_energy_balance(data):
         return
     _, table = res.columns()
     assert np.all(np.isfinite(table))
-    assert res.energy_balance < 0.02
+    # a second-order step conserves a modified energy that differs from the true one by up to
+    # (omega h)^2 / 4 of it in the stiffest mode it met: twice that, plus 0.5 %
+    assert res.energy_balance < 0.5 * res.max_omega_dt**2 + 0.005
 
 
 MUTATIONS = st.sampled_from(["delete", "junk", "unknown", "negate"])
