@@ -34,7 +34,7 @@ def user_errors():
         yield
     except InputError as err:
         for p in err.problems:
-            say(f"error: {p}")
+            say("error: " + p.replace("\r", "\\r").replace("\n", "\\n"))
         raise typer.Exit(EXIT_INPUT) from None
     except AnalysisError as err:
         say(f"error: {err}")

@@ -257,8 +257,10 @@ def _format_loc(loc: tuple) -> str:
             out += f"[{part + 1}]"
         elif part in ("record", "sine") or str(part).startswith(("Record[", "Sine[")):
             continue  # the union's tag is noise to a user
-        else:
+        elif re.fullmatch(r"[A-Za-z0-9_\-]+", str(part)):
             out += ("." if out else "") + str(part)
+        else:  # a key with spaces or control characters: quoted, so the message stays one line
+            out += f"[{str(part)!r}]"
     return out or "(deck)"
 
 
