@@ -24,7 +24,7 @@ def _label(name: str, study: Study) -> str:
 
 
 def _dt_label(dt: float) -> str:
-    return f"{dt * 1e3:g} ms"
+    return f"{dt * 1e3:.4g} ms"
 
 
 def _reference_note(study: Study) -> str:
@@ -81,7 +81,8 @@ def plot_error_vs_dt(study: Study, path: Path) -> None:
     if hi > 0:
         dts = np.array(sorted(study.dts))
         guide = lo * (dts / dts[0]) ** 2
-        ax.loglog(dts, guide, color="0.6", ls="--", lw=0.9, label="slope 2")
+        keep = guide <= max(hi, lo * 4)  # within the data's range
+        ax.loglog(dts[keep], guide[keep], color="0.6", ls="--", lw=0.9, label="slope 2")
     ax.axvline(study.deck_dt, color="0.4", ls=":", lw=1.0)
     ax.annotate("deck dt", (study.deck_dt, 0.98), xycoords=("data", "axes fraction"), rotation=90,
                 fontsize=7, color="0.3", xytext=(3, 0), textcoords="offset points", va="top")
