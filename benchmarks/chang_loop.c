@@ -25,7 +25,10 @@ static int branch_eval(const double *p, double s, double u, double *c, double *k
         double em = expm1(x);
         *c += b1 * em;
         *kc += b1 * b2 * (em + 1.0);
-        *big += b1 * (em / b2 - u);
+        if (fabs(x) < 1e-5)
+            *big += b1 * u * x * (0.5 + x / 6.0);
+        else
+            *big += b1 * (em / b2 - u);
     }
     double g1 = p[GAMMA1], g2 = p[GAMMA2];
     if (g1 != 0.0 && g2 != 0.0) {

@@ -18,7 +18,7 @@ import yaml
 from pydantic import BaseModel, ConfigDict, Discriminator, Field, Tag, ValidationError, field_validator, model_validator
 
 from .errors import InputError
-from .hysteresis import parameter_set, limiting_curve
+from .hysteresis import limiting_curve, limiting_slope, parameter_set, reversal_stiffness
 
 PosFloat = Annotated[float, Field(gt=0)]
 Point = Annotated[list[float], Field(min_length=2, max_length=2)]
@@ -62,6 +62,13 @@ class HysteresisSet(_Model):
     @model_validator(mode="after")
     def _curves_ordered(self):
         p = self.array()
+        with np.errstate(over="ignore", invalid="ignore"):
+            k = reversal_stiffness(p, 0.0)
+            slopes = [float(limiting_slope(p, s, 0.0)) for s in (1, -1)]
+        # no support is stiffer than 1e100 N/m; beyond it sums of stiffnesses may overflow
+        if not all(abs(x) < 1e100 for x in (k, *slopes)):
+            raise ValueError(f"the stiffness at u = 0 ({max(abs(k), *map(abs, slopes)):.3g}) is far out of "
+                             "any physical range")
         gap = float(limiting_curve(p, 1, 0.0) - limiting_curve(p, -1, 0.0))
         if not gap >= 0.0:
             raise ValueError(

@@ -81,7 +81,10 @@ def branch_eval(p, e, row, s, u):
         em = math.expm1(x)
         c += b1 * em
         kc += b1 * b2 * (em + 1.0)
-        big += b1 * (em / b2 - u)
+        if abs(x) < 1e-5:  # em / b2 - u by its series: exact even where b2 u underflows
+            big += b1 * u * x * (0.5 + x / 6.0)
+        else:
+            big += b1 * (em / b2 - u)
     g1 = p[e, row, GAMMA1]
     g2 = p[e, row, GAMMA2]
     if g1 != 0.0 and g2 != 0.0:

@@ -71,12 +71,13 @@ class Excitation:
 
 @dataclass(frozen=True)
 class Element:
-    """One element as the user wrote it (count expanded into ``index`` sharing the same row)."""
+    """One [[elements]] entry as the user wrote it; ``row`` is its row in the kernel arrays."""
 
     x: tuple[float, float]  # attachment point relative to G, m
     angle_deg: float
     hysteresis: str
     count: int
+    row: int
 
 
 @dataclass(frozen=True)
@@ -86,8 +87,9 @@ class System:
     title: str
     body: Polygon
     mass: np.ndarray  # (3,) diag(m, m, J)
+    # kernel rows: elements with the same b and set deform alike and are evaluated once
     bvec: np.ndarray  # (ne, 3) rows b_e = (cos a, sin a, x1 sin a - x2 cos a)
-    mult: np.ndarray  # (ne,) identical elements in parallel
+    mult: np.ndarray  # (ne,) how many identical elements each row stands for
     params: np.ndarray  # (ne, 2, 8) VRM sets
     k0: np.ndarray  # (ne,) elastic stiffness of each element: the K0 of the structure-dependent methods
     k_reversal: np.ndarray  # (ne,) stiffness at a reversal at u = 0 (the stiffest instant of a loop)
@@ -112,9 +114,19 @@ class System:
     def n_output_elements(self) -> int:
         return int(self.mult.sum())
 
-    def expand(self, per_element: np.ndarray) -> np.ndarray:
-        """Repeat the columns of (n, ne) element data by their multiplicity (CSV order)."""
-        return np.repeat(per_element, self.mult.astype(int), axis=1)
+    def expand(self, per_row: np.ndarray) -> np.ndarray:
+        """(n, rows) kernel data to (n, elements) in CSV order: deck order, ``count`` expanded."""
+        columns = [el.row for el in self.elements for _ in range(el.count)]
+        return per_row[:, columns]
+
+    def row_elements(self, row: int) -> list[int]:
+        """CSV numbers (1-based) of the elements that kernel row ``row`` stands for."""
+        out, k = [], 1
+        for el in self.elements:
+            if el.row == row:
+                out.extend(range(k, k + el.count))
+            k += el.count
+        return out
 
 
 def b_vector(x1: float, x2: float, angle_rad: float) -> np.ndarray:
@@ -241,17 +253,26 @@ def assemble(deck: dk.Deck, base: Path) -> System:
         k_rev[name] = k
         k_el[name] = max(float(limiting_slope(p, 1, 0.0)), float(limiting_slope(p, -1, 0.0)), 0.0)
 
-    rows, mult, params, k0, elements = [], [], [], [], []
+    rows, mult, names, elements = [], [], [], []
     for el in deck.elements:
         if el.vertex is not None:
             x = body.vertices[el.vertex - 1]
         else:
             x = np.asarray(el.point, dtype=float) - body.centroid
-        rows.append(b_vector(x[0], x[1], math.radians(el.angle_deg)))
-        mult.append(el.count)
-        params.append(sets[el.hysteresis])
-        k0.append(k_el[el.hysteresis])
-        elements.append(Element((float(x[0]), float(x[1])), el.angle_deg, el.hysteresis, el.count))
+        b = b_vector(x[0], x[1], math.radians(el.angle_deg))
+        # an element that deforms exactly like an earlier one with the same set adds to its
+        # row: the seed's shear isolators under P1 and P2 share b = (0, 1, x1)
+        same = [r for r, (bb, nn) in enumerate(zip(rows, names))
+                if nn == el.hysteresis and np.allclose(bb, b, rtol=0.0, atol=1e-12)]
+        if same:
+            row = same[0]
+            mult[row] += el.count
+        else:
+            row = len(rows)
+            rows.append(b)
+            names.append(el.hysteresis)
+            mult.append(el.count)
+        elements.append(Element((float(x[0]), float(x[1])), el.angle_deg, el.hysteresis, el.count, row))
     bvec = np.array(rows)
     free = free_directions(bvec, body)
     if free:
@@ -264,9 +285,9 @@ def assemble(deck: dk.Deck, base: Path) -> System:
         mass=mass,
         bvec=bvec,
         mult=np.array(mult, dtype=float),
-        params=np.array(params),
-        k0=np.array(k0),
-        k_reversal=np.array([k_rev[el.hysteresis] for el in deck.elements]),
+        params=np.array([sets[n] for n in names]),
+        k0=np.array([k_el[n] for n in names]),
+        k_reversal=np.array([k_rev[n] for n in names]),
         elements=tuple(elements),
         excitation=excitation,
         notes=tuple(notes),

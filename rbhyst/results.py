@@ -99,8 +99,9 @@ class Result:
             },
             "elements": [
                 {"x_m": list(el.x), "angle_deg": el.angle_deg, "hysteresis": el.hysteresis,
-                 "count": el.count, "k0_N_m": float(k), "k_reversal_N_m": float(kr)}
-                for el, k, kr in zip(self.system.elements, self.system.k0, self.system.k_reversal)
+                 "count": el.count, "k0_N_m": float(self.system.k0[el.row]),
+                 "k_reversal_N_m": float(self.system.k_reversal[el.row])}
+                for el in self.system.elements
             ],
             "analysis": {
                 "integrator": self.settings.integrator,

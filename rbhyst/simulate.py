@@ -55,9 +55,10 @@ def simulate(system: System, s: Settings) -> Result:
     load = np.ascontiguousarray(system.excitation.load(t_c, system.mass))
     minv = 1.0 / system.mass
     k0 = system.K0
-    coef = np.stack([method.coefficients(system.mass, k0, h_c / 2**lv)
-                     for lv in range(s.max_substep_level + 1)])
     level0 = min_level(system, s, method, h_c)
+    # levels below level0 are never used (and may be singular for an extreme K0)
+    coef = np.stack([method.coefficients(system.mass, k0, h_c / 2**max(lv, level0))
+                     for lv in range(s.max_substep_level + 1)])
 
     d = np.zeros(3)
     v = np.zeros(3)
@@ -126,11 +127,12 @@ def min_level(system: System, s: Settings, method, h: float) -> int:
     return level
 
 
-def _element_name(system: System, e: int) -> str:
-    first = 1 + int(system.mult[:e].sum())
-    el = system.elements[e]
-    span = f"e{first}" if el.count == 1 else f"e{first}-e{first + el.count - 1}"
-    return f"element {span} ({el.hysteresis!r} at ({el.x[0]:.4g}, {el.x[1]:.4g}) m, {el.angle_deg:g} deg)"
+def _element_name(system: System, row: int) -> str:
+    """'element e3' or 'elements e3, e4, e7' (CSV numbers) with the first one's place."""
+    numbers = system.row_elements(row)
+    el = next(el for el in system.elements if el.row == row)
+    span = ("element " if len(numbers) == 1 else "elements ") + ", ".join(f"e{k}" for k in numbers)
+    return f"{span} ({el.hysteresis!r} at ({el.x[0]:.4g}, {el.x[1]:.4g}) m, {el.angle_deg:g} deg)"
 
 
 def _raise_on_failure(system: System, s: Settings, info: np.ndarray, nsub: int) -> None:

@@ -48,8 +48,13 @@ def test_seed_scene_assembles_with_counted_elements(tmp_path):
     assert system.mass[2] == pytest.approx(297.7294, abs=1e-4)
     assert system.mass[0] == SEED_MASS
     assert system.n_output_elements == 8
-    assert system.bvec.shape == (4, 3)
-    np.testing.assert_array_equal(system.mult, [2, 2, 2, 2])
+    # the shear isolators under P1 and P2 both have b = (0, 1, 0.4714): one kernel row of 4
+    assert system.bvec.shape == (3, 3)
+    np.testing.assert_array_equal(system.mult, [2, 4, 2])
+    assert [el.row for el in system.elements] == [0, 1, 2, 1]
+    assert system.row_elements(1) == [3, 4, 7, 8]
+    cols = system.expand(np.array([[10.0, 20.0, 30.0]]))
+    np.testing.assert_array_equal(cols, [[10, 10, 20, 20, 30, 30, 20, 20]])
 
 
 @pytest.mark.parametrize("elements, free", [
