@@ -7,6 +7,7 @@ A method with a solver of its own (the reference) gives ``solve`` instead.
 
 from __future__ import annotations
 
+import importlib
 from dataclasses import dataclass
 from typing import Callable
 
@@ -30,19 +31,22 @@ class Method:
     solve: Callable | None = None
 
 
-def _registry() -> dict[str, Method]:
-    from . import central_difference, chang, kr_alpha, newmark, reference
-
-    methods = (chang.METHOD, central_difference.METHOD, newmark.METHOD, kr_alpha.METHOD, reference.METHOD)
-    return {m.name: m for m in methods}
+#: name -> module: a module is imported only when its method is used (the reference
+#: pulls in more than a plain run needs)
+_MODULES = {
+    "chang": "chang",
+    "central-difference": "central_difference",
+    "newmark": "newmark",
+    "kr-alpha": "kr_alpha",
+    "reference": "reference",
+}
 
 
 def names() -> list[str]:
-    return list(_registry())
+    return list(_MODULES)
 
 
 def get(name: str) -> Method:
-    reg = _registry()
-    if name not in reg:
-        raise KeyError(f"unknown integrator {name!r}; choose one of {', '.join(reg)}")
-    return reg[name]
+    if name not in _MODULES:
+        raise KeyError(f"unknown integrator {name!r}; choose one of {', '.join(_MODULES)}")
+    return importlib.import_module(f".{_MODULES[name]}", __name__).METHOD

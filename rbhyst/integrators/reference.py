@@ -34,7 +34,7 @@ import time
 
 import numpy as np
 from numba import njit
-from scipy.integrate._ivp import dop853_coefficients as _dop
+from . import dop853_tableau as _dop
 
 from ..errors import AnalysisError
 from ..hysteresis import ALPHA, EXP_ARG_MAX, branch_eval, branch_row
