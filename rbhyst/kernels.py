@@ -348,7 +348,7 @@ def run(method, coef, minv, bvec, mult, params, load, h_c, nsub_c, n_steps, ever
     substeps = 0
     level_used = 0
     level = 0
-    omega_dt_seen = 0.0
+    omega_dt2_seen = 0.0  # (omega h)^2: the square root once, at the end
     row = 0
     limit2 = omega_dt_limit * omega_dt_limit
 
@@ -417,9 +417,8 @@ def run(method, coef, minv, bvec, mult, params, load, h_c, nsub_c, n_steps, ever
                             return row
                         accepted = False
                         break
-                omega_dt = math.sqrt(max(lam, 0.0)) * h
-                if omega_dt > omega_dt_seen:
-                    omega_dt_seen = omega_dt
+                if lam * h * h > omega_dt2_seen:
+                    omega_dt2_seen = lam * h * h
                 for i in range(3):
                     e_in += 0.5 * (p0[i] + p1[i]) * (d1[i] - d[i])
                     d[i] = d1[i]
@@ -467,7 +466,7 @@ def run(method, coef, minv, bvec, mult, params, load, h_c, nsub_c, n_steps, ever
     info[I_STATUS] = OK
     info[I_SUBSTEPS] = substeps
     info[I_LEVEL] = level_used
-    info[I_OMEGA_DT] = omega_dt_seen
+    info[I_OMEGA_DT] = math.sqrt(omega_dt2_seen)
     info[I_STEPS] = steps_taken
     info[I_ITER] = iterations
     return row

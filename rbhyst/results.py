@@ -129,8 +129,13 @@ class Result:
 
 
 def write_csv(result: Result, path: Path) -> None:
+    """time_history.csv, 10 significant digits (a row format applied to lists: faster than savetxt)."""
     names, table = result.columns()
-    np.savetxt(path, table, delimiter=",", header=",".join(names), comments="", fmt="%.10g")
+    row = ",".join(["%.10g"] * table.shape[1])
+    with open(path, "w") as fh:
+        fh.write(",".join(names) + "\n")
+        fh.write("\n".join([row % tuple(r) for r in table.tolist()]))
+        fh.write("\n")
 
 
 def write_summary(result: Result, path: Path) -> None:
