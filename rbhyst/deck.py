@@ -18,6 +18,7 @@ import yaml
 from pydantic import BaseModel, ConfigDict, Discriminator, Field, Tag, ValidationError, field_validator, model_validator
 
 from .errors import InputError
+from .textfiles import read_text
 from .hysteresis import limiting_curve, limiting_slope, parameter_set, reversal_stiffness
 
 PosFloat = Annotated[float, Field(gt=0)]
@@ -304,12 +305,7 @@ def parse_deck(data: Any) -> Deck:
 
 def read_mapping(path: Path) -> dict:
     """Parse a TOML (.toml) or YAML (.yaml/.yml) file into a mapping."""
-    try:
-        text = path.read_text(encoding="utf-8")
-    except FileNotFoundError:
-        raise InputError(f"{path}: no such file") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"{path}: cannot be read ({exc})") from None
+    text = read_text(path)
     suffix = path.suffix.lower()
     if suffix == ".toml":
         try:

@@ -15,6 +15,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import InputError
+from .textfiles import is_number, read_text
 
 #: NPTS/DT as in "NPTS=  4000, DT= .01000 SEC" (NGA) or "4000  0.0100  NPTS, DT" (older PEER)
 _AT2_NEW = re.compile(r"NPTS\s*=\s*(\d+)\s*[,;]?\s*DT\s*=\s*([-+]?[\d.]+(?:[eE][-+]?\d+)?)", re.I)
@@ -81,7 +82,7 @@ def read_table(path: Path, dt: float | None = None) -> Series:
         if not text:
             continue
         toks = [t for t in re.split(r"[,;\s]+", text) if t]
-        if not rows and first is None and not _numeric(toks[0]):
+        if not rows and first is None and not is_number(toks[0]):
             first = j  # a header row
             continue
         row = [_number(t, f"{path}:{j}") for t in toks]
@@ -123,21 +124,8 @@ def read_series(path: Path, dt: float | None = None) -> Series:
     return read_table(path, dt)
 
 
-def _numeric(tok: str) -> bool:
-    try:
-        float(tok)
-    except ValueError:
-        return False
-    return True
-
-
 def _read_lines(path: Path) -> list[str]:
-    try:
-        text = path.read_text(encoding="utf-8", errors="strict")
-    except FileNotFoundError:
-        raise InputError(f"{path}: no such file") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"{path}: cannot be read ({exc.__class__.__name__})") from None
+    text = read_text(path)
     lines = text.splitlines()
     if not any(line.strip() for line in lines):
         raise InputError(f"{path}: the file is empty")

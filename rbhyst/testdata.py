@@ -21,6 +21,7 @@ from pathlib import Path
 import numpy as np
 
 from .errors import InputError
+from .textfiles import is_number, read_text
 
 DISPLACEMENT_UNITS = {"m": 1.0, "cm": 1e-2, "mm": 1e-3, "um": 1e-6, "in": 0.0254}
 FORCE_UNITS = {"N": 1.0, "kN": 1e3, "MN": 1e6, "lbf": 4.4482216152605, "kip": 4448.2216152605}
@@ -117,12 +118,7 @@ def significant_reversals(u: np.ndarray, tol: float = CYCLE_TOL) -> np.ndarray:
 def read_loop_data(path: str | Path, u_units: str | None = None, f_units: str | None = None) -> LoopData:
     """Read a measured force-displacement CSV; raise InputError with one line on any problem."""
     path = Path(path)
-    try:
-        text = path.read_text(encoding="utf-8-sig")
-    except FileNotFoundError:
-        raise InputError(f"{path}: no such file") from None
-    except (OSError, UnicodeDecodeError) as exc:
-        raise InputError(f"{path}: cannot be read ({exc})") from None
+    text = read_text(path, encoding="utf-8-sig")
 
     if u_units is not None and not _unit(DISPLACEMENT_UNITS, u_units):
         raise InputError(f"--u-units: unknown displacement unit {u_units!r}; "
@@ -137,7 +133,7 @@ def read_loop_data(path: str | Path, u_units: str | None = None, f_units: str | 
     head_no, header = rows[0]
     delim = _delimiter(header)
     labels = _cells(header, delim)
-    if all(_is_number(c) for c in labels):
+    if all(is_number(c) for c in labels):
         # no header row: allowed only when both units come from the flags
         if u_units is None or f_units is None:
             raise InputError(f"{path}: line {head_no}: no header with units (e.g. 'u_mm,f_kN' or "
@@ -179,14 +175,6 @@ def read_loop_data(path: str | Path, u_units: str | None = None, f_units: str | 
             f"{path}: {len(u)} samples with {n_rev} reversal{'s' if n_rev != 1 else ''} of the displacement: "
             "less than one cycle (a loop needs the displacement to go out, back and out again)")
     return LoopData(name=path.name, u=u, f=f, u_units=uu, f_units=fu)
-
-
-def _is_number(tok: str) -> bool:
-    try:
-        float(tok)
-    except ValueError:
-        return False
-    return True
 
 
 def _pick_columns(path, line_no, labels, parts) -> tuple[int, int]:
