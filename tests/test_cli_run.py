@@ -277,3 +277,19 @@ def test_a_failed_run_leaves_previous_results_untouched(tmp_path):
     assert code == 2
     assert {p.name: p.read_bytes() for p in out.iterdir()} == before
     assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".out")] == []
+
+
+@pytest.mark.parametrize("method", ["chang", "newmark", "reference"])
+def test_the_kernels_run_as_plain_python_too(tmp_path, method):
+    """NUMBA_DISABLE_JIT=1 runs the same code uncompiled and gives the same numbers."""
+    import os
+
+    data = seed_deck(duration=0.1)
+    deck = write_deck(tmp_path, data)
+    env = dict(os.environ, NUMBA_DISABLE_JIT="1")
+    for name, environ in (("py", env), ("jit", None)):
+        subprocess.run([sys.executable, "-m", "rbhyst", "run", str(deck), "--no-plots", "--integrator", method,
+                        "--out", str(tmp_path / name)], check=True, capture_output=True, env=environ)
+    py = np.loadtxt(tmp_path / "py" / "time_history.csv", delimiter=",", skiprows=1)
+    jit = np.loadtxt(tmp_path / "jit" / "time_history.csv", delimiter=",", skiprows=1)
+    np.testing.assert_allclose(py, jit, rtol=1e-9, atol=1e-12 * np.max(np.abs(jit)))
