@@ -215,17 +215,7 @@ def _integrate(minv, bvec, mult, params, brk, pcoef, t_out, rtol, atol, s_init, 
             # ---- one DOP853 step
             for i in range(NY):
                 K[0, i] = f[i]
-            bad = -1
-            for st in range(1, 12):
-                for i in range(NY):
-                    acc = 0.0
-                    for j in range(st):
-                        acc += A[st, j] * K[j, i]
-                    ytmp[i] = y[i] + hh * acc
-                kst = K[st]
-                bad = _rhs(t + C[st] * hh, ytmp, k, brk, pcoef, minv, bvec, mult, params, s, up, gp, p, kst)
-                if bad >= 0:
-                    break
+            bad = _stages(1, 12, t, hh, y, k, brk, pcoef, minv, bvec, mult, params, s, up, gp, p, A, C, K, ytmp)
             n_fev += 11
             if bad < 0:
                 for i in range(NY):
@@ -389,14 +379,7 @@ def _integrate(minv, bvec, mult, params, brk, pcoef, t_out, rtol, atol, s_init, 
                 # redo the step to the reversal exactly
                 h_ev = t_ev - t
                 if h_ev > 0.0:
-                    for st in range(1, 12):
-                        for i in range(NY):
-                            acc = 0.0
-                            for j in range(st):
-                                acc += A[st, j] * K[j, i]
-                            ytmp[i] = y[i] + h_ev * acc
-                        kst = K[st]
-                        _rhs(t + C[st] * h_ev, ytmp, k, brk, pcoef, minv, bvec, mult, params, s, up, gp, p, kst)
+                    _stages(1, 12, t, h_ev, y, k, brk, pcoef, minv, bvec, mult, params, s, up, gp, p, A, C, K, ytmp)
                     n_fev += 11
                     for i in range(NY):
                         acc = 0.0
@@ -468,17 +451,26 @@ def _integrate(minv, bvec, mult, params, brk, pcoef, t_out, rtol, atol, s_init, 
 
 
 @njit(cache=True, error_model="numpy")
-def _dense_coefficients(t, hh, y, y_new, f, f_new, k, brk, pcoef, minv, bvec, mult, params, s, up, gp, p,
-                        A, C, D, K, F, ytmp):
-    """The three extra stages and the 7 rows of DOP853's dense output (as scipy's DOP853)."""
-    for st in range(13, 16):
+def _stages(first, last, t, hh, y, k, brk, pcoef, minv, bvec, mult, params, s, up, gp, p, A, C, K, ytmp):
+    """Runge-Kutta stages first..last-1 of a step hh from (t, y) into the rows of K;
+    returns the first element whose exponential overflowed, or -1."""
+    for st in range(first, last):
         for i in range(NY):
             acc = 0.0
             for j in range(st):
                 acc += A[st, j] * K[j, i]
             ytmp[i] = y[i] + hh * acc
-        kst = K[st]
-        _rhs(t + C[st] * hh, ytmp, k, brk, pcoef, minv, bvec, mult, params, s, up, gp, p, kst)
+        bad = _rhs(t + C[st] * hh, ytmp, k, brk, pcoef, minv, bvec, mult, params, s, up, gp, p, K[st])
+        if bad >= 0:
+            return bad
+    return -1
+
+
+@njit(cache=True, error_model="numpy")
+def _dense_coefficients(t, hh, y, y_new, f, f_new, k, brk, pcoef, minv, bvec, mult, params, s, up, gp, p,
+                        A, C, D, K, F, ytmp):
+    """The three extra stages and the 7 rows of DOP853's dense output (as scipy's DOP853)."""
+    _stages(13, 16, t, hh, y, k, brk, pcoef, minv, bvec, mult, params, s, up, gp, p, A, C, K, ytmp)
     for i in range(NY):
         dy = y_new[i] - y[i]
         F[0, i] = dy
