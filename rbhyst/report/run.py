@@ -29,7 +29,9 @@ def plot_body(result: Result, path: Path) -> None:
     for el in system.elements:
         x, y = el.x
         a = math.radians(el.angle_deg)
-        ex, ey = x - length * math.cos(a), y - length * math.sin(a)
+        # along its line of action, on the side away from G: clear of the body's outline
+        side = 1.0 if x * math.cos(a) + y * math.sin(a) >= 0.0 else -1.0
+        ex, ey = x + side * length * math.cos(a), y + side * length * math.sin(a)
         ax.plot([ex, x], [ey, y], color="C0", lw=2.5, solid_capstyle="round", zorder=4)
         ax.plot(ex, ey, marker="s", color="C0", ms=5, zorder=4)
         label = f"e{k}" if el.count == 1 else f"e{k}-{k + el.count - 1}"
