@@ -122,23 +122,34 @@ def omega_squared(bvec, mult, kpeak, wgt):
     return trace, worst
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def bbt_sums(bvec, mult, k, minv, normalized):
+    """The six entries (11, 22, 33, 12, 13, 23) of K = sum mult k_e b_e b_e^T, or where
+    ``normalized`` of M^-1/2 K M^-1/2 with negative k_e taken as 0 (for omega_max^2)."""
+    s11 = s22 = s33 = s12 = s13 = s23 = 0.0
+    q0 = math.sqrt(minv[0]) if normalized else 1.0
+    q1 = math.sqrt(minv[1]) if normalized else 1.0
+    q2 = math.sqrt(minv[2]) if normalized else 1.0
+    for e in range(bvec.shape[0]):
+        ke = mult[e] * (max(k[e], 0.0) if normalized else k[e])
+        if ke == 0.0:
+            continue
+        x = bvec[e, 0] * q0
+        y = bvec[e, 1] * q1
+        z = bvec[e, 2] * q2
+        s11 += ke * x * x
+        s22 += ke * y * y
+        s33 += ke * z * z
+        s12 += ke * x * y
+        s13 += ke * x * z
+        s23 += ke * y * z
+    return s11, s22, s33, s12, s13, s23
+
+
 @njit(cache=True, error_model="numpy")
 def omega_squared_exact(bvec, mult, minv, kpeak):
     """max eig(M^-1/2 K M^-1/2), the exact omega_max^2 of the tangent system."""
-    s11 = s22 = s33 = s12 = s13 = s23 = 0.0
-    for e in range(bvec.shape[0]):
-        k = mult[e] * max(kpeak[e], 0.0)
-        if k == 0.0:
-            continue
-        x = bvec[e, 0] * math.sqrt(minv[0])
-        y = bvec[e, 1] * math.sqrt(minv[1])
-        z = bvec[e, 2] * math.sqrt(minv[2])
-        s11 += k * x * x
-        s22 += k * y * y
-        s33 += k * z * z
-        s12 += k * x * y
-        s13 += k * x * z
-        s23 += k * y * z
+    s11, s22, s33, s12, s13, s23 = bbt_sums(bvec, mult, kpeak, minv, True)
     return sym3_max_eig(s11, s22, s33, s12, s13, s23)
 
 
@@ -237,23 +248,10 @@ def step_newmark_implicit(mass, bvec, mult, params, d, v, a, p1, h, es, en, kpea
         ok, bad, work = update_elements(bvec, mult, params, d1, es, en, kpeak, r)
         if not ok:
             return False, bad, 0.0, it + 1
-        k11 = c * mass[0]
-        k22 = c * mass[1]
-        k33 = c * mass[2]
-        k12 = 0.0
-        k13 = 0.0
-        k23 = 0.0
-        for e in range(bvec.shape[0]):
-            k = mult[e] * en[e, K]
-            b0 = bvec[e, 0]
-            b1 = bvec[e, 1]
-            b2 = bvec[e, 2]
-            k11 += k * b0 * b0
-            k22 += k * b1 * b1
-            k33 += k * b2 * b2
-            k12 += k * b0 * b1
-            k13 += k * b0 * b2
-            k23 += k * b1 * b2
+        k11, k22, k33, k12, k13, k23 = bbt_sums(bvec, mult, en[:, K], mass, False)
+        k11 += c * mass[0]
+        k22 += c * mass[1]
+        k33 += c * mass[2]
         g0 = mass[0] * (c * (d1[0] - d[0] - h * v[0]) - a[0]) + r[0] - p1[0]
         g1 = mass[1] * (c * (d1[1] - d[1] - h * v[1]) - a[1]) + r[1] - p1[1]
         g2 = mass[2] * (c * (d1[2] - d[2] - h * v[2]) - a[2]) + r[2] - p1[2]

@@ -44,6 +44,8 @@ class Result:
     substeps: int = 0  # extra substeps taken where the stiffness needed them
     max_substep_level: int = 0
     max_omega_dt: float = 0.0
+    steps_taken: int = 0  # steps actually taken, substeps included (0: not counted by the method)
+    newton_iterations: int = 0  # newmark only
     wall_s: float = 0.0
 
     @property
@@ -115,6 +117,8 @@ class Result:
                 "max_substep_level": self.max_substep_level,
                 "max_omega_dt": self.max_omega_dt,
                 "max_omega_dt_limit": self.settings.max_omega_dt,
+                "steps_taken": self.steps_taken,
+                "newton_iterations": self.newton_iterations,
                 "wall_s": self.wall_s,
             },
             "energy": {

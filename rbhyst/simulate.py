@@ -102,6 +102,8 @@ def simulate(system: System, s: Settings) -> Result:
         substeps=int(info[kernels.I_SUBSTEPS]),
         max_substep_level=int(info[kernels.I_LEVEL]),
         max_omega_dt=float(info[kernels.I_OMEGA_DT]),
+        steps_taken=int(info[kernels.I_STEPS]),
+        newton_iterations=int(info[kernels.I_ITER]),
         wall_s=wall,
     )
 
