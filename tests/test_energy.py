@@ -1,6 +1,5 @@
 """Energy balance: input = kinetic + hysteretic (stored and dissipated), per step."""
 
-import copy
 
 import numpy as np
 import pytest
@@ -11,7 +10,7 @@ from rbhyst.deck import parse_deck
 from rbhyst.model import assemble
 from rbhyst.outdir import staged_directory
 from rbhyst.simulate import Settings, simulate
-from conftest import DECKS, seed_deck, square_linear_deck, write_deck
+from conftest import seed_deck, square_linear_deck, write_deck
 
 
 def test_balance_error_falls_as_dt_squared_on_a_linear_scene(tmp_path):
