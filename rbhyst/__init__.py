@@ -1,3 +1,21 @@
-"""rbhyst: nonlinear dynamics of 2D rigid bodies on Vaiana-Rosati hysteretic supports."""
+"""rbhyst: nonlinear dynamics of 2D rigid bodies on Vaiana-Rosati hysteretic supports.
+
+The Python API (see README, "Python API"): ``load_deck``, ``run``, and the ``Result`` they give.
+"""
 
 __version__ = "0.1.0"
+
+__all__ = ["load_deck", "run", "InputError", "AnalysisError", "__version__"]
+
+
+def __getattr__(name):
+    # the API is imported on first use: `import rbhyst` stays cheap for the command line
+    if name in ("load_deck", "run"):
+        from . import api
+
+        return getattr(api, name)
+    if name in ("InputError", "AnalysisError"):
+        from . import errors
+
+        return getattr(errors, name)
+    raise AttributeError(f"module 'rbhyst' has no attribute {name!r}")

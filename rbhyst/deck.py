@@ -15,7 +15,9 @@ from typing import Annotated, Any, Generic, Literal, TypeVar, Union
 
 import numpy as np
 import yaml
-from pydantic import BaseModel, ConfigDict, Discriminator, Field, Tag, ValidationError, field_validator, model_validator
+from pydantic import (BaseModel, ConfigDict, Discriminator, Field, PrivateAttr, Tag, ValidationError, field_validator,
+                      model_validator)
+from pydantic_core import PydanticCustomError
 
 from .errors import InputError
 from .textfiles import read_text
@@ -86,23 +88,104 @@ class HysteresisSet(_Model):
 # ---------------------------------------------------------------- body and elements
 
 
-class Body(_Model):
-    vertices: Annotated[list[Point], Field(min_length=3)]
+def _key_problems(problems: list[tuple[str, str]]) -> PydanticCustomError:
+    """Problems with named keys of a table, raised from its model validator: one line per key."""
+    return PydanticCustomError("deck_keys", "; ".join(f"{k}: {m}" for k, m in problems),
+                               {"problems": tuple(problems)})
+
+
+Vertices = Annotated[list[Point], Field(min_length=3)]
+
+
+class Part(_Model):
+    """One uniform polygon of a body of several parts (seed eqs. 1-4 each)."""
+
+    vertices: Vertices
     mass: PosFloat
 
 
-class Element(_Model):
+class Body(_Model):
+    """Exactly one of three forms: ``vertices`` + ``mass`` (one uniform polygon), ``parts``
+    (several uniform polygons, which may overlap), or ``mass`` + ``mass_centre`` + ``inertia``
+    (about the mass centre) + ``vertices`` (the outline, for drawing and vertex references)."""
+
+    vertices: Vertices | None = None
+    mass: PosFloat | None = None
+    parts: Annotated[list[Part], Field(min_length=1)] | None = None
+    mass_centre: Point | None = None
+    inertia: PosFloat | None = None
+    #: the acceleration of gravity in the deck's frame (m/s2): the weight m g acts at G and the
+    #: run starts from the static equilibrium under it (see README, "Gravity preload")
+    gravity: Point | None = None
+
+    @model_validator(mode="after")
+    def _one_form(self):
+        given = [k for k in ("vertices", "mass", "mass_centre", "inertia") if getattr(self, k) is not None]
+        problems = []
+        if self.parts is not None:
+            why = {"vertices": "the parts' vertices are the outline", "mass": "each part has its own mass",
+                   "mass_centre": "the parts give the mass centre", "inertia": "the parts give the inertia"}
+            problems = [(k, f"not with body.parts: {why[k]}") for k in given]
+        else:
+            problems = [(k, "required key is missing") for k in ("vertices", "mass") if k not in given]
+            direct = ("mass_centre", "inertia")
+            if any(k in given for k in direct):
+                problems += [(k, f"required with body.{other}: a body given by its properties needs mass, "
+                                 "mass_centre, inertia (about the mass centre) and vertices (its outline)")
+                             for k, other in (direct, direct[::-1]) if k not in given]
+        if problems:
+            raise _key_problems(problems)
+        return self
+
+    @property
+    def form(self) -> Literal["polygon", "parts", "direct"]:
+        if self.parts is not None:
+            return "parts"
+        return "polygon" if self.inertia is None else "direct"
+
+
+class _Placed(_Model):
+    """Something attached to the body at a vertex or a point, along an angle."""
+
+    part: Annotated[int, Field(ge=1)] | None = None
     vertex: Annotated[int, Field(ge=1)] | None = None
     point: Point | None = None
     angle_deg: float
-    hysteresis: str
     count: Annotated[int, Field(ge=1)] = 1
 
     @model_validator(mode="after")
     def _one_place(self):
         if (self.vertex is None) == (self.point is None):
             raise ValueError("give exactly one of `vertex` (1-based index) or `point` ([x1, x2] in m)")
+        if self.part is not None and self.vertex is None:
+            raise _key_problems([("part", "goes with `vertex` (that part's vertex); a `point` is in the "
+                                          "deck's frame whichever part it lies on")])
         return self
+
+
+class Element(_Placed):
+    hysteresis: str
+    #: the deformation it can take (m): symmetric, or [lower, upper] with lower < 0 < upper
+    stroke: PosFloat | Annotated[list[float], Field(min_length=2, max_length=2)] | None = None
+
+    @field_validator("stroke")
+    @classmethod
+    def _stroke_brackets_zero(cls, v):
+        if isinstance(v, list) and not v[0] < 0.0 < v[1]:
+            raise ValueError(f"[{v[0]:g}, {v[1]:g}] must be [lower, upper] with lower < 0 < upper (m)")
+        return v
+
+    @property
+    def stroke_limits(self) -> tuple[float, float] | None:
+        if self.stroke is None:
+            return None
+        return (-self.stroke, self.stroke) if not isinstance(self.stroke, list) else tuple(self.stroke)
+
+
+class Damper(_Placed):
+    """A linear viscous damper: force c times its rate of deformation along angle_deg (eqs. 5-8)."""
+
+    c: PosFloat  # N s/m
 
 
 # ---------------------------------------------------------------- excitation
@@ -128,15 +211,33 @@ class Sine(_Model, Generic[U]):
     phase_deg: float = 0.0
     start: Annotated[float, Field(ge=0)] = 0.0
     cycles: PosFloat | None = None
+    #: the amplitude rises smoothly from 0 over this many cycles (signals.ramp_envelope)
+    ramp_cycles: Annotated[float, Field(ge=0)] = 0.0
+
+
+PULSES = ("half-sine", "haversine", "terminal-peak-sawtooth", "triangle")
+
+
+class Pulse(_Model, Generic[U]):
+    """A shock pulse of peak ``amplitude`` lasting ``duration`` s from ``start`` (MIL-DTL-901,
+    MIL-STD-810 shapes): half-sine, haversine, terminal-peak sawtooth, symmetric triangle."""
+
+    type: Literal["half-sine", "haversine", "terminal-peak-sawtooth", "triangle"]
+    amplitude: float
+    units: U
+    duration: PosFloat
+    start: Annotated[float, Field(ge=0)] = 0.0
 
 
 def _signal_kind(v: Any) -> str:
-    return v.get("type", "record") if isinstance(v, dict) else getattr(v, "type", "record")
+    kind = v.get("type", "record") if isinstance(v, dict) else getattr(v, "type", "record")
+    return "pulse" if kind in PULSES else kind
 
 
 def _signal(units):
     return Annotated[
-        Union[Annotated[Record[units], Tag("record")], Annotated[Sine[units], Tag("sine")]],
+        Union[Annotated[Record[units], Tag("record")], Annotated[Sine[units], Tag("sine")],
+              Annotated[Pulse[units], Tag("pulse")]],
         Discriminator(_signal_kind),
     ]
 
@@ -147,7 +248,8 @@ class Support(_Model):
 
 
 class Force(_Model):
-    point: Point = [0.0, 0.0]
+    #: where p1 and p2 act, in the deck's frame; absent: at the mass centre G (said in a note)
+    point: Point | None = None
     p1: _signal(ForceUnits) | None = None
     p2: _signal(ForceUnits) | None = None
     m3: _signal(MomentUnits) | None = None
@@ -169,6 +271,14 @@ class Analysis(_Model):
     max_omega_dt: PosFloat = 0.5
     #: at most 2**max_substep_level substeps per step before the run stops
     max_substep_level: Annotated[int, Field(ge=0, le=20)] = 12
+    #: the adaptive integrator's relative tolerance
+    rtol: Annotated[float, Field(gt=1e-14, lt=1e-2)] = 1e-8
+    #: the accuracy asked for: rbhyst chooses how to meet it (see README, "Accuracy")
+    tolerance: Annotated[float, Field(gt=0, lt=1)] | None = None
+    #: a run whose estimated error exceeds this warns
+    warn_error: Annotated[float, Field(gt=0, lt=1)] = 0.01
+    #: estimate every run's error (false skips it: a sweep that has checked its dt once)
+    estimate_error: bool = True
 
     @field_validator("integrator")
     @classmethod
@@ -180,10 +290,81 @@ class Analysis(_Model):
         return v
 
 
+#: names a point may not take (case aside): G's own plots and spectra, the ground's spectra
+RESERVED_POINT_NAMES = ("G", "ground", "x1", "x2", "theta3")
+_POINT_NAME = re.compile(r"[A-Za-z0-9_]+")
+
+
+class OutputPoint(_Model):
+    """A point of interest on the body: its motion gets columns `<name>_u1_m`, ... (eqs. 7-8)."""
+
+    name: str
+    point: Point  # m, in the deck's frame
+
+    @field_validator("name")
+    @classmethod
+    def _name(cls, v: str) -> str:
+        if not _POINT_NAME.fullmatch(v):
+            raise ValueError(f"{v!r}: letters, digits and _ only (it names columns and files)")
+        reserved = {r.lower(): r for r in RESERVED_POINT_NAMES}
+        if v.lower() in reserved:
+            raise ValueError(f"{v!r} is taken by rbhyst's own outputs ({', '.join(RESERVED_POINT_NAMES)}: "
+                             "the mass centre's plots, the ground's spectra): choose another")
+        return v
+
+
+Ratio = Annotated[float, Field(ge=0, lt=1)]
+
+
+class Spectra(_Model):
+    """Response spectra of the ground, of G and of every point (see README, "Outputs")."""
+
+    #: damping ratios of the oscillators (a number or a list)
+    damping: Annotated[list[Ratio], Field(min_length=1)] = [0.05]
+    #: s; default: 100 periods log-spaced from 0.01 to 10 s
+    periods_s: Annotated[list[PosFloat], Field(min_length=1)] | None = None
+
+    @field_validator("damping", mode="before")
+    @classmethod
+    def _one_is_a_list(cls, v):
+        return [v] if isinstance(v, (int, float)) and not isinstance(v, bool) else v
+
+    @field_validator("damping")
+    @classmethod
+    def _distinct_dampings(cls, v):
+        if len(set(v)) != len(v):
+            raise ValueError(f"{v}: each damping once")
+        return v
+
+    @field_validator("periods_s")
+    @classmethod
+    def _distinct_periods(cls, v):
+        if v is not None and len(set(v)) != len(v):
+            raise ValueError("each period once")
+        return v
+
+    @property
+    def dampings(self) -> tuple[float, ...]:
+        return tuple(self.damping)
+
+    @property
+    def periods(self) -> tuple[float, ...]:
+        """Ascending; the default when none are given."""
+        if self.periods_s is None:
+            from .response.spectra import default_periods
+
+            return tuple(float(t) for t in default_periods())
+        return tuple(sorted(self.periods_s))
+
+
 class Output(_Model):
     directory: str | None = None
     plots: bool = True
     every: Annotated[int, Field(ge=1)] = 1
+    #: points of interest on the body (their motion in time_history.csv, plots, spectra)
+    points: list[OutputPoint] | None = None
+    #: response spectra (only when present: a run pays for what it asks)
+    spectra: Spectra | None = None
 
 
 class Loops(_Model):
@@ -200,10 +381,89 @@ class Deck(_Model):
     body: Body | None = None
     hysteresis: Annotated[dict[str, HysteresisSet], Field(min_length=1)]
     elements: Annotated[list[Element], Field(min_length=1)] | None = None
+    dampers: list[Damper] | None = None
     excitation: Excitation | None = None
     analysis: Analysis | None = None
     output: Output = Output()
     loops: Loops | None = None
+    #: the file the deck came from (None for one built in code): relative paths resolve beside it
+    _source: Path | None = PrivateAttr(default=None)
+
+    @property
+    def source(self) -> Path | None:
+        return self._source
+
+    @property
+    def base(self) -> Path:
+        """The folder that relative file paths in the deck resolve against."""
+        return self._source.parent if self._source is not None else Path.cwd()
+
+    def with_values(self, values: dict[str, Any]) -> "Deck":
+        """A copy with values replaced by dotted keys as in the deck, e.g.
+        ``{"hysteresis.wri_shear.loading.kb": 2.2e5, "body.mass": 700.0, "elements[2].count": 3}``.
+
+        Every key but the last must exist in the deck; the result is validated like a deck
+        (an InputError names the key and what is wrong).
+        """
+        data = self.model_dump(mode="python", exclude_unset=True, exclude_defaults=False)
+        problems = []
+        for key, value in values.items():
+            try:
+                set_dotted(data, key, value)
+            except KeyError as err:
+                problems.append(f"{key}: {err.args[0]}")
+        if problems:
+            raise InputError(problems)
+        deck = parse_deck(data)
+        deck._source = self._source
+        return deck
+
+
+_KEY_PART = re.compile(r"([^.\[\]]+)|\[(\d+)\]")
+
+
+def split_key(key: str) -> list[str | int]:
+    """'elements[2].count' -> ['elements', 1, 'count'] (list indices count from 1, as in error lines)."""
+    parts: list[str | int] = []
+    pos = 0
+    for m in _KEY_PART.finditer(key):
+        gap = key[pos:m.start()]
+        if gap not in ("", "."):
+            raise KeyError("cannot read the key")
+        pos = m.end()
+        if m.group(2) is not None:
+            k = int(m.group(2))
+            if k < 1:
+                raise KeyError("list indices count from 1")
+            parts.append(k - 1)
+        elif m.group(1).isdigit() and parts:
+            parts.append(int(m.group(1)) - 1)  # elements.2.count: the same as elements[2].count
+        else:
+            parts.append(m.group(1))
+    if not parts or pos != len(key):
+        raise KeyError("cannot read the key")
+    return parts
+
+
+def set_dotted(data: dict, key: str, value: Any) -> None:
+    """Set ``data`` at a dotted deck key; every part but the last must exist (KeyError otherwise)."""
+    parts = split_key(key)
+    node: Any = data
+    for i, part in enumerate(parts[:-1]):
+        where = _format_loc(tuple(parts[:i + 1]))
+        if isinstance(part, int):
+            if not isinstance(node, list) or not 0 <= part < len(node):
+                raise KeyError(f"no {where} in the deck")
+        elif not isinstance(node, dict) or part not in node or node[part] is None:
+            raise KeyError(f"no {where} in the deck")
+        node = node[part]
+    last = parts[-1]
+    if isinstance(last, int):
+        if not isinstance(node, list) or not 0 <= last < len(node):
+            raise KeyError(f"no {_format_loc(tuple(parts))} in the deck")
+    elif not isinstance(node, dict):
+        raise KeyError(f"{_format_loc(tuple(parts[:-1]))} is not a table")
+    node[last] = value
 
 
 def cross_references(deck: Deck) -> list[str]:
@@ -215,12 +475,50 @@ def cross_references(deck: Deck) -> list[str]:
                 f"elements[{k}].hysteresis: undefined set {el.hysteresis!r}; "
                 f"defined: {', '.join(sorted(deck.hysteresis))}"
             )
-        if el.vertex is not None and deck.body is not None and el.vertex > len(deck.body.vertices):
-            problems.append(
-                f"elements[{k}].vertex: {el.vertex} is out of range: the body has "
-                f"{len(deck.body.vertices)} vertices"
-            )
+        if el.vertex is not None and deck.body is not None:
+            problems += [f"elements[{k}].{p}" for p in vertex_reference_problems(deck.body, el.part, el.vertex)]
+    for k, dp in enumerate(deck.dampers or [], start=1):
+        if dp.vertex is not None and deck.body is not None:
+            problems += [f"dampers[{k}].{p}" for p in vertex_reference_problems(deck.body, dp.part, dp.vertex)]
     return problems
+
+
+def output_problems(deck: Deck) -> list[str]:
+    """Point names used twice (ignoring case: they name files)."""
+    problems, seen = [], {}
+    for k, p in enumerate(deck.output.points or [], start=1):
+        first = seen.setdefault(p.name.lower(), k)
+        if first != k:
+            problems.append(f"output.points[{k}].name: {p.name!r} is already the name of output.points[{first}]"
+                            + (" (names differ only in case, and they name files)" if
+                               deck.output.points[first - 1].name != p.name else ""))
+    return problems
+
+
+def vertex_reference_problems(body: Body, part: int | None, vertex: int) -> list[str]:
+    """What is wrong with ``part``/``vertex`` of an element on ``body`` ("key: message").
+
+    With parts, ``vertex`` alone is the vertex of part 1 when there is one part and an
+    error when there are several (which part's would be a guess); without parts, ``part``
+    is an error and ``vertex`` counts body.vertices.
+    """
+    if body.parts is None:
+        if part is not None:
+            return ["part: the body has no parts: `vertex` alone counts body.vertices"]
+        if vertex > len(body.vertices):
+            return [f"vertex: {vertex} is out of range: the body has {len(body.vertices)} vertices"]
+        return []
+    n = len(body.parts)
+    if part is None:
+        if n > 1:
+            return [f"vertex: the body has {n} parts: say whose vertex with `part` (1 to {n})"]
+        part = 1
+    if part > n:
+        return [f"part: {part} is out of range: the body has {n} part{'s' if n > 1 else ''}"]
+    nv = len(body.parts[part - 1].vertices)
+    if vertex > nv:
+        return [f"vertex: {vertex} is out of range: body.parts[{part}] has {nv} vertices"]
+    return []
 
 
 def check_runnable(deck: Deck) -> None:
@@ -263,7 +561,7 @@ def _format_loc(loc: tuple) -> str:
     for part in loc:
         if isinstance(part, int):
             out += f"[{part + 1}]"
-        elif part in ("record", "sine") or str(part).startswith(("Record[", "Sine[")):
+        elif part in ("record", "sine", "pulse") or str(part).startswith(("Record[", "Sine[", "Pulse[")):
             continue  # the union's tag is noise to a user
         elif re.fullmatch(r"[A-Za-z0-9_\-]+", str(part)):
             out += ("." if out else "") + str(part)
@@ -282,9 +580,12 @@ def _messages(err: ValidationError) -> list[str]:
             msg = "unknown key"
         elif e["type"] == "missing":
             msg = "required key is missing"
+        elif e["type"] == "deck_keys":  # several problems, each under its own key
+            lines += [f"{_format_loc((*e['loc'], key))}: {m}" for key, m in e["ctx"]["problems"]]
+            continue
         elif e["type"] == "union_tag_invalid":
-            msg = (f"unknown type {e['ctx']['tag']!r}: use type = \"sine\", or give `file` "
-                   "(and no type) for a record")
+            msg = (f"unknown type {e['ctx']['tag']!r}: use type = \"sine\" or a pulse "
+                   f"({', '.join(repr(p) for p in PULSES)}), or give `file` (and no type) for a record")
         lines.append(f"{_format_loc(e['loc'])}: {msg}")
     return list(dict.fromkeys(lines))
 
@@ -297,7 +598,7 @@ def parse_deck(data: Any) -> Deck:
         deck = Deck.model_validate(data)
     except ValidationError as err:
         raise InputError(_messages(err)) from None
-    problems = cross_references(deck)
+    problems = cross_references(deck) + output_problems(deck)
     if problems:
         raise InputError(problems)
     return deck
@@ -326,6 +627,8 @@ def read_mapping(path: Path) -> dict:
 
 
 def load_deck(path: str | Path) -> Deck:
-    """Read and validate a deck file."""
-    return parse_deck(read_mapping(Path(path)))
+    """Read and validate a deck file; relative paths in it resolve beside it."""
+    deck = parse_deck(read_mapping(Path(path)))
+    deck._source = Path(path).resolve()
+    return deck
 

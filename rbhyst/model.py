@@ -14,10 +14,12 @@ from typing import Callable
 import numpy as np
 
 from . import deck as dk
+from . import signals
 from .errors import InputError
-from .geometry import Polygon, PolygonError, polygon
+from .body import Body, body_from_deck
 from .hysteresis import limiting_slope, reversal_stiffness
-from .records import Series, read_series
+from .file_units import check_declared
+from .records import Series, read_record
 
 Signal = Callable[[np.ndarray], np.ndarray]
 
@@ -32,12 +34,49 @@ class Excitation:
     p2: Signal | None = None
     m3: Signal | None = None
     point: tuple[float, float] = (0.0, 0.0)  # where p1, p2 act, relative to G
+    #: a load that does not vary: the weight, once the static equilibrium under it is known
+    constant: tuple[float, float, float] = (0.0, 0.0, 0.0)
     duration: float | None = None  # of the longest record or finite pulse
-    finest_dt: float | None = None  # the finest record step
+    finest_dt: float | None = None  # the longest step that follows every signal (record samples, pulse shapes)
 
     @property
     def has_support(self) -> bool:
         return self.ag1 is not None or self.ag2 is not None
+
+    @property
+    def signals(self) -> dict[str, Signal]:
+        return {k: s for k, s in (("ag1", self.ag1), ("ag2", self.ag2), ("p1", self.p1), ("p2", self.p2),
+                                  ("m3", self.m3)) if s is not None}
+
+    def acts_before(self, t_end: float) -> bool:
+        """Whether any signal is non-zero somewhere in [0, t_end)."""
+        return any(s.acts_before(t_end) for s in self.signals.values())
+
+    def substeps(self, dt: float, n_steps: int) -> tuple[np.ndarray, np.ndarray]:
+        """Compute steps per output step that follow every signal acting then: a record's
+        samples, a sine's period or a pulse's shape over signals.POINTS_PER_FEATURE; outside a
+        signal's span its shape costs nothing.
+
+        Returns (bounds, nsub): output steps bounds[i] to bounds[i + 1] (step k runs from k dt
+        to (k + 1) dt) take nsub[i] compute steps each; a few numbers however long the run.
+        """
+        spans = []
+        for s in self.signals.values():
+            need = max(1, math.ceil(dt / s.step - 1e-9))
+            if need == 1:
+                continue
+            # one step more on either side: the coarse steps next to the span then see none of
+            # it (an analytic signal's node values are hat averages, see load_nodes)
+            first = max(0, math.floor(s.start / dt) - 1)
+            last = n_steps if s.end is None else min(n_steps, math.ceil(s.end / dt) + 1)
+            if first < last:
+                spans.append((first, last, need))
+        bounds = np.unique([0, n_steps, *(f for f, _, _ in spans), *(l for _, l, _ in spans)])
+        nsub = np.ones(len(bounds) - 1, dtype=np.int64)
+        for first, last, need in spans:
+            inside = (bounds[:-1] >= first) & (bounds[1:] <= last)
+            nsub[inside] = np.maximum(nsub[inside], need)
+        return bounds, nsub
 
     def support(self, t: np.ndarray) -> np.ndarray:
         """(n, 2) support acceleration."""
@@ -50,22 +89,47 @@ class Excitation:
 
     def load(self, t: np.ndarray, mass: np.ndarray) -> np.ndarray:
         """(n, 3) generalized load p = -M (ag1, ag2, 0) + (p1, p2, p3), eq. 13 for p3."""
-        p = np.zeros((len(t), 3))
-        if self.has_support:
-            ag = self.support(t)
-            p[:, 0] -= mass[0] * ag[:, 0]
-            p[:, 1] -= mass[1] * ag[:, 1]
+        return self._combine({k: s(t) for k, s in self.signals.items()}, len(t), mass)
+
+    def load_nodes(self, t: np.ndarray, h: float, mass: np.ndarray) -> np.ndarray:
+        """(n, 3) load at the nodes t (spacing h) of a compute grid that interpolates it linearly.
+
+        Records are linear between their samples and are taken at the nodes, and so is an
+        analytic signal where it is smooth. Within a step of one of its breakpoints (where it
+        starts, stops or has a corner) a node takes the signal's average under its hat function
+        (weight 1 - |t - t_k| / h), so that the trapezoidal impulse over the steps around it is
+        the signal's exact integral: a jump (a sawtooth's end, a sine stopping at a non-zero
+        value) falls wherever it falls and never costs an order of accuracy.
+        """
+        values = {}
+        for k, s in self.signals.items():
+            v = s(t)
+            if not isinstance(s, Series):
+                near = np.zeros(len(t), dtype=bool)
+                for b in s.breakpoints:
+                    if b > 0.0:  # a signal that starts with the analysis starts at its right limit
+                        near |= np.abs(t - b) < h
+                if near.any():
+                    v[near] = signals.hat_average(s, t[near], h)
+            values[k] = v
+        return self._combine(values, len(t), mass)
+
+    def _combine(self, values: dict[str, np.ndarray], n: int, mass: np.ndarray) -> np.ndarray:
+        p = np.empty((n, 3))
+        p[:] = self.constant
+        if "ag1" in values:
+            p[:, 0] -= mass[0] * values["ag1"]
+        if "ag2" in values:
+            p[:, 1] -= mass[1] * values["ag2"]
         x1p, x2p = self.point
-        if self.p1 is not None:
-            f = self.p1(t)
-            p[:, 0] += f
-            p[:, 2] -= f * x2p
-        if self.p2 is not None:
-            f = self.p2(t)
-            p[:, 1] += f
-            p[:, 2] += f * x1p
-        if self.m3 is not None:
-            p[:, 2] += self.m3(t)
+        if "p1" in values:
+            p[:, 0] += values["p1"]
+            p[:, 2] -= values["p1"] * x2p
+        if "p2" in values:
+            p[:, 1] += values["p2"]
+            p[:, 2] += values["p2"] * x1p
+        if "m3" in values:
+            p[:, 2] += values["m3"]
         return p
 
 
@@ -78,6 +142,18 @@ class Element:
     hysteresis: str
     count: int
     row: int
+    stroke: tuple[float, float] | None = None  # (lower, upper) deformation it can take, m
+
+
+@dataclass(frozen=True)
+class Damper:
+    """One [[dampers]] entry: a linear viscous damper along ``angle_deg`` at x (relative to G)."""
+
+    x: tuple[float, float]
+    angle_deg: float
+    c: float  # N s/m, each
+    count: int
+    b: tuple[float, float, float]  # its deformation is b . q (eqs. 5-8), its force acts back as b f
 
 
 @dataclass(frozen=True)
@@ -85,8 +161,8 @@ class System:
     """The rigid body on its elements: M q'' + R(q) = p(t), q = (u1, u2, theta3)."""
 
     title: str
-    body: Polygon
-    mass: np.ndarray  # (3,) diag(m, m, J)
+    body: Body
+    mass: np.ndarray  # (3,) diag(m, m, J), J about the mass centre G
     # kernel rows: elements with the same b and set deform alike and are evaluated once
     bvec: np.ndarray  # (ne, 3) rows b_e = (cos a, sin a, x1 sin a - x2 cos a)
     mult: np.ndarray  # (ne,) how many identical elements each row stands for
@@ -96,6 +172,24 @@ class System:
     elements: tuple[Element, ...]
     excitation: Excitation
     notes: tuple[str, ...] = field(default=())
+    dampers: tuple[Damper, ...] = field(default=())
+    #: the weight m (g1, g2, 0) acting at G when the deck gives body.gravity
+    weight: np.ndarray | None = None
+    #: the static equilibrium under the weight (rbhyst.static), once found: the run starts there
+    static: object | None = None
+
+    def at_rest_under_gravity(self) -> "System":
+        """This system with its static equilibrium found and the weight in its load (no weight: itself)."""
+        if self.weight is None or self.static is not None:
+            return self
+        from dataclasses import replace
+
+        from .static import static_equilibrium
+
+        st = static_equilibrium(self)
+        # the load that holds the body exactly at rest there is the elements' resultant (the
+        # weight to within the iterations' 1e-13): without excitation, rest stays rest to the bit
+        return replace(self, static=st, excitation=replace(self.excitation, constant=tuple(map(float, st.r))))
 
     @property
     def K0(self) -> np.ndarray:
@@ -109,6 +203,24 @@ class System:
         by the loop's stiffness monitor: omega_t h <= 0.5 < 2 for every method.
         """
         return (self.bvec.T * (self.mult * self.k0)) @ self.bvec
+
+    @property
+    def C(self) -> np.ndarray:
+        """Viscous damping matrix sum count c b b^T (3, 3) of the dampers (zeros without)."""
+        c = np.zeros((3, 3))
+        for dp in self.dampers:
+            b = np.asarray(dp.b)
+            c += dp.count * dp.c * np.outer(b, b)
+        return c
+
+    @property
+    def damper_b(self) -> np.ndarray:
+        """(dampers, 3) each damper's b, count expanded (CSV order)."""
+        return np.array([dp.b for dp in self.dampers for _ in range(dp.count)]).reshape(-1, 3)
+
+    @property
+    def damper_c(self) -> np.ndarray:
+        return np.array([dp.c for dp in self.dampers for _ in range(dp.count)])
 
     @property
     def n_output_elements(self) -> int:
@@ -135,9 +247,9 @@ def b_vector(x1: float, x2: float, angle_rad: float) -> np.ndarray:
     return np.array([c, s, x1 * s - x2 * c])
 
 
-def free_directions(bvec: np.ndarray, body: Polygon) -> list[str]:
+def free_directions(bvec: np.ndarray, body: Body) -> list[str]:
     """Describe each rigid motion q != 0 with B^T q = 0: no element resists it."""
-    size = float(np.max(np.abs(body.vertices))) or 1.0
+    size = body.extent or 1.0
     scaled = bvec * np.array([1.0, 1.0, 1.0 / size])  # rotation in m at the body's size
     _, sv, vt = np.linalg.svd(scaled, full_matrices=True)
     sv = np.concatenate([sv, np.zeros(3 - len(sv))])
@@ -153,37 +265,60 @@ def free_directions(bvec: np.ndarray, body: Polygon) -> list[str]:
         else:
             c1, c2 = -u2 / th, u1 / th
             if abs(c1) < 1e-9 * size and abs(c2) < 1e-9 * size:
-                out.append("rotation about the centroid G")
+                out.append("rotation about the mass centre G")
             else:
-                out.append(f"rotation about the point ({c1 + 0.0:.6g}, {c2 + 0.0:.6g}) m from G")
+                g = body.mass_centre  # the user's frame, not G's
+                out.append(f"rotation about the point ({c1 + g[0] + 0.0:.6g}, {c2 + g[1] + 0.0:.6g}) m")
     return out
 
 
-def _signal(spec, scale_units: dict[str, float], base: Path) -> tuple[Signal, float | None, float | None]:
-    """A callable of time in SI units, the signal's own duration and record step."""
+#: an element attached farther from G than this many body sizes is worth a note
+FAR_ELEMENT = 3.0
+#: a body larger than this (m) is worth a note: were its vertices given in mm?
+LARGE_BODY_M = 50.0
+
+
+def implausible_geometry(body: Body, elements) -> list[str]:
+    """Notes on geometry that may be intended but is more often a slip: elements far from the body,
+    a body the size of a building (vertices in mm?)."""
+    notes = []
+    size = body.extent
+    g = body.mass_centre
+    if size > LARGE_BODY_M:
+        notes.append(f"body: it reaches {size:.4g} m from its mass centre: are the vertices in mm? "
+                     "(rbhyst takes every length in m)")
+    for k, el in enumerate(elements, start=1):
+        r = math.hypot(*el.x)
+        if r > FAR_ELEMENT * size:
+            notes.append(f"elements[{k}]: attached at ({el.x[0] + g[0]:.4g}, {el.x[1] + g[1]:.4g}) m, {r:.4g} m from "
+                         f"the mass centre: {r / size:.3g} times the body's size ({size:.4g} m)")
+    return notes
+
+
+def _signal(spec, scale_units: dict[str, float], base: Path,
+            notes: list[str]) -> tuple[Signal, float | None, float | None]:
+    """A callable of time in SI units, the signal's own end and the longest step that follows
+    it (a record's sample step; a sine's period or a pulse's duration over
+    signals.POINTS_PER_FEATURE); what the run should say about the signal goes to ``notes``."""
     factor = scale_units[spec.units]
     if isinstance(spec, dk.Sine):
-        w = 2.0 * math.pi * spec.frequency_hz
-        t0 = spec.start
-        t1 = math.inf if spec.cycles is None else t0 + spec.cycles / spec.frequency_hz
-        amp = spec.amplitude * factor
-        ph = math.radians(spec.phase_deg)
-
-        def sine(t, amp=amp, w=w, t0=t0, t1=t1, ph=ph):
-            t = np.asarray(t, dtype=float)
-            on = (t >= t0) & (t <= t1)
-            return np.where(on, amp * np.sin(w * (t - t0) + ph), 0.0)
-
-        return sine, (None if math.isinf(t1) else t1), None
+        s = signals.sine(spec.amplitude * factor, spec.frequency_hz, spec.phase_deg, spec.start, spec.cycles,
+                         spec.ramp_cycles)
+        return s, s.end, s.step
+    if isinstance(spec, dk.Pulse):
+        s = signals.Pulse(spec.type, spec.amplitude * factor, spec.duration, spec.start)
+        return s, s.end, s.step
     path = Path(spec.file)
     if not path.is_absolute():
         path = base / path
-    series = read_series(path, spec.dt)
-    series = Series(series.t0, series.dt, series.values * factor * spec.scale)
+    record = read_record(path, spec.dt)
+    check_declared(record.declared, spec.units)  # the file's own word on its units must agree
+    notes.extend(record.notes)
+    series = Series(record.series.t0, record.series.dt, record.series.values * factor * spec.scale)
     return series, series.duration, series.dt
 
 
-def _excitation(deck: dk.Deck, base: Path, body: Polygon) -> Excitation:
+def _excitation(deck: dk.Deck, base: Path, body: Body, notes: list[str]) -> Excitation:
     ex = deck.excitation
     if ex is None:
         return Excitation()
@@ -194,11 +329,13 @@ def _excitation(deck: dk.Deck, base: Path, body: Polygon) -> Excitation:
     def add(name, spec, units, loc):
         if spec is None:
             return
+        said: list[str] = []
         try:
-            s, dur, step = _signal(spec, units, base)
+            s, dur, step = _signal(spec, units, base, said)
         except InputError as err:
             problems.extend(f"{loc}: {p}" for p in err.problems)
             return
+        notes.extend(f"{loc}: {n}" for n in said)
         sig[name] = s
         if dur is not None:
             durations.append(dur)
@@ -213,8 +350,14 @@ def _excitation(deck: dk.Deck, base: Path, body: Polygon) -> Excitation:
         add("p1", ex.force.p1, dk.FORCE_UNITS, "excitation.force.p1")
         add("p2", ex.force.p2, dk.FORCE_UNITS, "excitation.force.p2")
         add("m3", ex.force.m3, dk.MOMENT_UNITS, "excitation.force.m3")
-        # the point is given in the deck's frame; loads act about G
-        point = (ex.force.point[0] - body.centroid[0], ex.force.point[1] - body.centroid[1])
+        if ex.force.point is None:
+            if ex.force.p1 is not None or ex.force.p2 is not None:
+                g = body.mass_centre
+                notes.append(f"excitation.force.point is not given: p1 and p2 act at the mass centre G "
+                             f"({g[0]:.6g}, {g[1]:.6g}) m")
+        else:
+            # the point is given in the deck's frame; loads act about G
+            point = (ex.force.point[0] - body.mass_centre[0], ex.force.point[1] - body.mass_centre[1])
     if problems:
         raise InputError(problems)
     return Excitation(
@@ -228,21 +371,8 @@ def _excitation(deck: dk.Deck, base: Path, body: Polygon) -> Excitation:
 def assemble(deck: dk.Deck, base: Path) -> System:
     """Build the System of a runnable deck; relative file paths resolve against ``base``."""
     dk.check_runnable(deck)
-    try:
-        body = polygon(deck.body.vertices)
-    except PolygonError as err:
-        raise InputError(f"body.vertices: {err}") from None
-    notes = []
-    if body.reordered:
-        notes.append("body.vertices are clockwise: taken in reverse order for eqs. 2-4")
-    size = float(np.max(np.abs(body.vertices)))
-    if np.hypot(*body.centroid) > 1e-9 * size:
-        notes.append(
-            "body.vertices are not centred on the centroid: coordinates shifted by "
-            f"({-body.centroid[0]:.6g}, {-body.centroid[1]:.6g}) m so that G is the origin"
-        )
-    m = deck.body.mass
-    mass = np.array([m, m, body.polar_inertia(m)])
+    body, notes = body_from_deck(deck.body)
+    mass = np.array([body.mass, body.mass, body.inertia])
 
     sets = {name: hs.array() for name, hs in deck.hysteresis.items()}
     k_rev, k_el = {}, {}
@@ -253,32 +383,46 @@ def assemble(deck: dk.Deck, base: Path) -> System:
         k_rev[name] = k
         k_el[name] = max(float(limiting_slope(p, 1, 0.0)), float(limiting_slope(p, -1, 0.0)), 0.0)
 
-    rows, mult, names, elements = [], [], [], []
+    # an element that deforms exactly like another with the same set shares its kernel row:
+    # the seed's shear isolators under P1 and P2 share b = (0, 1, x1)
+    xs, bs = [], []
     for el in deck.elements:
-        if el.vertex is not None:
-            x = body.vertices[el.vertex - 1]
-        else:
-            x = np.asarray(el.point, dtype=float) - body.centroid
-        b = b_vector(x[0], x[1], math.radians(el.angle_deg))
-        # an element that deforms exactly like an earlier one with the same set adds to its
-        # row: the seed's shear isolators under P1 and P2 share b = (0, 1, x1)
-        same = [r for r, (bb, nn) in enumerate(zip(rows, names))
-                if nn == el.hysteresis and np.allclose(bb, b, rtol=0.0, atol=1e-12)]
-        if same:
-            row = same[0]
-            mult[row] += el.count
-        else:
-            row = len(rows)
-            rows.append(b)
-            names.append(el.hysteresis)
-            mult.append(el.count)
-        elements.append(Element((float(x[0]), float(x[1])), el.angle_deg, el.hysteresis, el.count, row))
+        x = body.vertex(el.part, el.vertex) if el.vertex is not None else np.asarray(el.point, float) - body.mass_centre
+        xs.append(x)
+        bs.append(b_vector(x[0], x[1], math.radians(el.angle_deg)))
+    b_all = np.array(bs)
+    key = np.round(b_all / 1e-12).astype(np.int64)  # equal where they round alike at 1e-12 (a pair split only costs time)
+    set_ids = {name: i for i, name in enumerate(deck.hysteresis)}
+    key = np.column_stack([key, [set_ids[el.hysteresis] for el in deck.elements]])
+    _, first, inverse = np.unique(key, axis=0, return_index=True, return_inverse=True)
+    inverse = inverse.ravel()
+    order = np.argsort(first)  # rows in the order of their first element
+    row_of = np.empty(len(first), dtype=int)
+    row_of[order] = np.arange(len(first))
+    rows = [b_all[first[k]] for k in order]
+    names = [deck.elements[first[k]].hysteresis for k in order]
+    mult = [0] * len(rows)
+    elements = []
+    for i, el in enumerate(deck.elements):
+        row = int(row_of[inverse[i]])
+        mult[row] += el.count
+        elements.append(Element((float(xs[i][0]), float(xs[i][1])), el.angle_deg, el.hysteresis, el.count, row,
+                                el.stroke_limits))
     bvec = np.array(rows)
+    notes.extend(implausible_geometry(body, elements))
     free = free_directions(bvec, body)
     if free:
         raise InputError(f"elements: the body is not restrained against {'; '.join(free)}")
 
-    excitation = _excitation(deck, base, body)
+    excitation = _excitation(deck, base, body, notes)
+    dampers = []
+    for dp in deck.dampers or []:
+        x = body.vertex(dp.part, dp.vertex) if dp.vertex is not None else np.asarray(dp.point, float) - body.mass_centre
+        b = b_vector(x[0], x[1], math.radians(dp.angle_deg))
+        dampers.append(Damper((float(x[0]), float(x[1])), dp.angle_deg, dp.c, dp.count, tuple(map(float, b))))
+    weight = None
+    if deck.body.gravity is not None:
+        weight = body.mass * np.array([deck.body.gravity[0], deck.body.gravity[1], 0.0])
     return System(
         title=deck.title or "",
         body=body,
@@ -291,4 +435,6 @@ def assemble(deck: dk.Deck, base: Path) -> System:
         elements=tuple(elements),
         excitation=excitation,
         notes=tuple(notes),
+        dampers=tuple(dampers),
+        weight=weight,
     )

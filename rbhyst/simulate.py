@@ -1,111 +1,302 @@
-"""simulate(system, ...) -> Result: the time grid, the load on it, and the compiled loop."""
+"""simulate(system, settings) -> Result: the time grid, the load on it, and the compiled loop.
+
+The loop runs one chunk of steps at a time; every chunk's rows pass through the run's
+reductions (extremes, plot data) and are kept in memory or streamed to a CSV file, so a
+run's memory does not grow with its length.
+"""
 
 from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass
 
 import numpy as np
 
 from . import integrators, kernels
 from .errors import AnalysisError, InputError
+from .history import Extremes, Layout, PlotData, Raw, spectrum_columns
+from .kernels import N_STATE, N_X, X_A, X_CUR, X_D, X_ITER, X_LEVEL_USED, X_OMEGA_DT2, X_STEPS, X_SUBSTEPS
 from .model import System
-from .results import Result
+from .results import CsvWriter, Result, RunStats
+from .settings import Settings, settings_from_deck  # noqa: F401  (re-exported: the run's inputs)
 
-
-@dataclass(frozen=True)
-class Settings:
-    """How to integrate: the deck's [analysis] and output.every after command-line overrides."""
-
-    integrator: str = "chang"
-    dt: float = 1e-3
-    duration: float | None = None
-    every: int = 1
-    max_omega_dt: float = 0.5
-    max_substep_level: int = 12
-    #: newmark: Newton correction <= newton_tol x the step's increment, at most newton_max_iter iterations
-    newton_tol: float = 1e-10
-    newton_max_iter: int = 20
+#: bytes of rows a chunk may hold (raw state and table): bounds a run's memory
+CHUNK_BYTES = 16_000_000
+#: at most this many steps of a run are compared with the adaptive solution (every k-th)
+COMPARE_POINTS = 200_000
 
 
 def grid(system: System, s: Settings) -> tuple[int, int]:
-    """(output steps, compute substeps per step): a record finer than dt is followed, not aliased."""
+    """(output steps, the most compute steps per output step): an excitation finer than dt is
+    followed, not aliased (see Excitation.substeps)."""
+    n_steps = output_steps(system, s)
+    return n_steps, int(system.excitation.substeps(s.dt, n_steps)[1].max())
+
+
+def output_steps(system: System, s: Settings) -> int:
     duration = s.duration if s.duration is not None else system.excitation.duration
     if duration is None:
         raise InputError("analysis.duration: required when no record or finite pulse gives it")
     if s.dt > duration:
         raise InputError(f"analysis.dt: {s.dt} s is larger than the duration {duration} s")
-    n_steps = max(1, math.ceil(duration / s.dt - 1e-9))
-    fine = system.excitation.finest_dt
-    nsub = max(1, math.ceil(s.dt / fine - 1e-9)) if fine else 1
-    return n_steps, nsub
+    return max(1, math.ceil(duration / s.dt - 1e-9))
 
 
-def simulate(system: System, s: Settings) -> Result:
-    """Integrate M q'' + R(q) = p(t) from rest with the chosen method (seed eq. 11)."""
+class Rows:
+    """Where a run's rows go: reductions over every step, and every ``every``-th row kept or streamed."""
+
+    def __init__(self, layout: Layout, n_steps: int, every: int, keep: bool, csv_path=None,
+                 spectra=None, dt: float | None = None):
+        """spectra: (dampings, periods) of the response spectra to stream (Settings.spectra), for
+        rows ``dt`` apart; None for none."""
+        self.layout = layout
+        self.every = every
+        self.extremes = Extremes(layout.names)
+        self.plot = PlotData(n_steps + 1, len(layout.names))
+        self._kept: list[np.ndarray] | None = [] if keep else None
+        self._csv = CsvWriter(csv_path, layout.names) if csv_path is not None else None
+        self._next = 0  # global index of the next row
+        # displacements at up to COMPARE_POINTS steps, for the error estimate (rbhyst.accuracy)
+        self.q_stride = max(1, -(-(n_steps + 1) // COMPARE_POINTS))
+        self._q: list[np.ndarray] = []
+        self.spectra = None
+        if spectra is not None:
+            from .response.located import SpectraSink
+
+            located = spectrum_columns(layout)
+            self._spectrum_columns = [c for _, c in located]
+            self.spectra = SpectraSink([label for label, _ in located], *spectra, dt=dt)
+
+    def add(self, raw: Raw) -> None:
+        table = self.layout.table(raw)
+        self.plot.update(table, self.extremes)
+        if self.spectra is not None:  # every step of dt, whatever output.every writes
+            self.spectra.update(table[:, self._spectrum_columns])
+        first_q = (-self._next) % self.q_stride
+        q = table[first_q::self.q_stride, 0:4].copy()
+        q[:, 1:4] += self.layout.origin  # absolute, as the adaptive solution compares them
+        self._q.append(q)
+        first = (-self._next) % self.every
+        written = table[first::self.every]
+        if self._kept is not None:
+            self._kept.append(written if self.every == 1 else written.copy())  # not a view of every step
+        if self._csv is not None:
+            self._csv.add(written)
+        self._next += len(table)
+
+    def spectra_result(self):
+        """The LocatedSpectra of every row so far (None without output.spectra)."""
+        return None if self.spectra is None else self.spectra.result()
+
+    @property
+    def q_sample(self) -> np.ndarray:
+        """(n, 4): time and u1, u2, theta3 at every q_stride-th step."""
+        return np.vstack(self._q)
+
+    def close(self) -> np.ndarray | None:
+        if self._csv is not None:
+            self._csv.close()
+        if self._kept is None:
+            return None
+        return np.vstack(self._kept) if self._kept else np.empty((0, len(self.layout.names)))
+
+
+def simulate(system: System, s: Settings, keep: bool = True, csv_path=None) -> Result:
+    """Integrate M q'' + R(q) = p(t) from rest with the chosen method (seed eq. 11).
+
+    keep: hold the written rows in memory (Result.table); csv_path: stream them to this file.
+    """
+    return prepare(system, s).run(keep=keep, csv_path=csv_path)
+
+
+def prepare(system: System, s: Settings) -> "Plan":
+    """Check the grid, build the method's coefficients and load its compiled kernel: what a
+    run needs before it writes anything."""
     method = integrators.get(s.integrator)
-    if method.solve is not None:
-        return method.solve(system, s)
+    system = system.at_rest_under_gravity()
     n_steps, nsub = grid(system, s)
     if n_steps < s.every:
         raise InputError(f"output.every: {s.every} is more than the {n_steps} steps of the analysis")
-    h_c = s.dt / nsub
-    t_c = h_c * np.arange(n_steps * nsub + 1)
-    load = np.ascontiguousarray(system.excitation.load(t_c, system.mass))
-    minv = 1.0 / system.mass
-    k0 = system.K0
-    level0 = min_level(system, s, method, h_c)
-    # levels below level0 are never used (and may be singular for an extreme K0)
-    coef = np.stack([method.coefficients(system.mass, k0, h_c / 2**max(lv, level0))
-                     for lv in range(s.max_substep_level + 1)])
+    if method.solve is not None:
+        return Plan(system, s, method)
+    return _FixedStepPlan(system, s, method)
 
-    d = np.zeros(3)
-    v = np.zeros(3)
-    a = minv * load[0]  # equilibrium at t = 0 with R(0) = 0: records rarely start at zero
-    n_rows = n_steps // s.every + 1
-    ne = system.bvec.shape[0]
-    out_d = np.zeros((n_rows, 3))
-    out_v = np.zeros((n_rows, 3))
-    out_a = np.zeros((n_rows, 3))
-    out_u = np.zeros((n_rows, ne))
-    out_f = np.zeros((n_rows, ne))
-    out_e = np.zeros((n_rows, 3))
-    info = np.zeros(kernels.INFO_SIZE)
-    args = (method.kernel_id, coef, minv, np.ascontiguousarray(system.bvec), system.mult,
-            np.ascontiguousarray(system.params), load, h_c, nsub, n_steps, s.every,
-            s.max_omega_dt, level0, s.max_substep_level, d, v, a,
-            out_d, out_v, out_a, out_u, out_f, out_e, info, s.newton_tol, s.newton_max_iter)
-    # load (or compile) the kernel before the clock starts: wall_s is time stepping only
-    kernels.run(*args[:9], 0, *args[10:])  # n_steps = 0
-    start = time.perf_counter()
-    kernels.run(*args)
-    wall = time.perf_counter() - start
-    _raise_on_failure(system, s, info, nsub)
 
-    t = s.dt * s.every * np.arange(n_rows)
-    ag = system.excitation.support(t) if system.excitation.has_support else None
-    return Result(
-        system=system,
-        settings=s,
-        time=t,
-        d=out_d,
-        v=out_v,
-        a=out_a,
-        ag=ag,
-        element_u=system.expand(out_u),
-        element_f=system.expand(out_f),
-        energy=out_e,
-        steps=n_steps,
-        record_substeps=nsub,
-        min_substep_level=level0,
-        substeps=int(info[kernels.I_SUBSTEPS]),
-        max_substep_level=int(info[kernels.I_LEVEL]),
-        max_omega_dt=float(info[kernels.I_OMEGA_DT]),
-        steps_taken=int(info[kernels.I_STEPS]),
-        newton_iterations=int(info[kernels.I_ITER]),
-        wall_s=wall,
-    )
+#: more compute steps than this is not an analysis anyone means (hours of time stepping)
+MAX_COMPUTE_STEPS = 10**10
+#: rows kept in memory (rbhyst.run without out=) may take at most this many bytes
+MAX_KEPT_BYTES = 2 * 1024**3
+#: bytes of time_history.csv per value: 10 significant digits, sign, exponent, separator
+CSV_BYTES_PER_VALUE = 16
+
+
+class Plan:
+    """A run ready to go. This one hands over to a method with a solver of its own."""
+
+    def __init__(self, system: System, s: Settings, method):
+        self.system, self.settings, self.method = system, s, method
+        self.n_steps, self.nsub = grid(system, s)
+
+    def check_size(self, keep: bool, folder=None) -> None:
+        """Refuse, before anything runs, what cannot fit: rows kept in memory beyond
+        MAX_KEPT_BYTES, a CSV larger than the free disk, an absurd number of steps."""
+        import shutil
+        from pathlib import Path
+
+        s = self.settings
+        steps = self.n_steps * self.nsub
+        where = "analysis.duration, analysis.dt"
+        if steps > MAX_COMPUTE_STEPS:
+            raise InputError(f"{where}: {self.n_steps:.3g} steps of {s.dt:g} s ({self.n_steps * s.dt:.4g} s) "
+                             f"{f'x {self.nsub} substeps ' if self.nsub > 1 else ''}is beyond any analysis "
+                             f"(more than {MAX_COMPUTE_STEPS:.0e} steps): shorten analysis.duration")
+        rows = self.n_steps // s.every + 1
+        n_cols = len(Layout(self.system, s.points).names)
+        need = rows * n_cols * CSV_BYTES_PER_VALUE
+        every_for = lambda budget: max(s.every, -(-self.n_steps * n_cols * CSV_BYTES_PER_VALUE // max(budget, 1)))
+        if folder is not None:
+            probe = Path(folder)
+            while not probe.exists() and probe != probe.parent:
+                probe = probe.parent
+            free = shutil.disk_usage(probe).free
+            if need > 0.9 * free:
+                raise InputError(
+                    f"{where}, output.every: the run would write {rows:.4g} rows of {n_cols} columns "
+                    f"(about {need / 1e9:.3g} GB of time_history.csv) with {free / 1e9:.3g} GB free on the disk: "
+                    f"output.every = {every_for(int(0.5 * free))} or a shorter analysis.duration would fit")
+        if keep and rows * n_cols * 8 > MAX_KEPT_BYTES:
+            raise InputError(
+                f"{where}, output.every: keeping {rows:.4g} rows of {n_cols} columns in memory takes "
+                f"{rows * n_cols * 8 / 1e9:.3g} GB: stream them to a folder instead (rbhyst.run(deck, out=...)), "
+                f"or raise output.every (to {every_for(MAX_KEPT_BYTES // 2)} or more)")
+
+    def run(self, keep: bool = True, csv_path=None) -> Result:
+        return self.method.solve(self.system, self.settings, keep=keep, csv_path=csv_path)
+
+
+class _FixedStepPlan(Plan):
+    """A fixed-step method in the compiled loop (rbhyst.kernels.loop).
+
+    Each output step k is split into ``substeps[k]`` compute steps where a signal needs it
+    (Excitation.substeps); each distinct split has its own coefficients and K0 substep level.
+    """
+
+    def __init__(self, system: System, s: Settings, method):
+        super().__init__(system, s, method)
+        mass = system.mass
+        self.minv = 1.0 / mass
+        self.cm = np.ascontiguousarray(system.C)
+        self.damped = bool(np.any(self.cm != 0.0))
+        self.bounds, self.substeps = system.excitation.substeps(s.dt, self.n_steps)
+        k0 = system.K0
+        self.coef, self.level0 = {}, {}
+        for nsub in np.unique(self.substeps):
+            h_c = s.dt / nsub
+            level0 = min_level(system, s, method, h_c)
+            # levels below level0 are never used (and may be singular for an extreme K0)
+            self.coef[int(nsub)] = np.stack([method.coefficients(mass, k0, self.cm, h_c / 2**max(lv, level0))
+                                             for lv in range(s.max_substep_level + 1)])
+            self.level0[int(nsub)] = level0
+        self.bvec = np.ascontiguousarray(system.bvec)
+        self.params = np.ascontiguousarray(system.params)
+        self.wgt = (self.bvec * self.bvec) @ self.minv
+        ne = self.bvec.shape[0]
+        self.layout = Layout(system, s.points)
+        self.chunk = min(_chunk_rows(ne, len(self.layout.names), self.nsub), self.n_steps)
+        # load (or compile) the kernel
+        self._call(np.zeros((1, 3)), 0.0, next(iter(self.coef)), 0, *self._state(), _Buffers(1, ne))
+
+    def _state(self):
+        """The loop's state at t = 0: at rest, elements virgin, and the initial acceleration."""
+        from .hysteresis import virgin_tangent
+
+        ne = self.bvec.shape[0]
+        x = np.zeros(N_X)
+        st = np.zeros((2, ne, N_STATE))
+        # virgin elements: u = f = 0 and no branch yet (S = 0), so the first move starts a branch
+        # whatever its direction; until it moves, an element's tangent is the stiffer of its two
+        # first moves, so the monitor sees a stiff body at rest before the first step that moves it
+        for e in range(ne):
+            st[0, e, kernels.K] = max(virgin_tangent(self.params[e], 1.0), virgin_tangent(self.params[e], -1.0))
+        p0 = self.system.excitation.load(np.zeros(1), self.system.mass)[0]
+        static = self.system.static
+        if static is not None:  # at rest at the static equilibrium under gravity, its branches as the path left them
+            st[0] = static.st
+            x[X_D:X_D + 3] = static.q
+            p0 = p0 - static.r
+        x[X_A:X_A + 3] = self.minv * p0  # equilibrium at t = 0: records rarely start at zero
+        x[X_CUR] = 0
+        return x, st
+
+    def _call(self, load, t0, nsub, n, x, st, buf):
+        from .kernels.compiled import kernel
+
+        s = self.settings
+        ne = self.bvec.shape[0]
+        self.info = np.zeros(kernels.INFO_SIZE)
+        return kernel("run_chunk")(self.method.kernel_id, self.coef[nsub], self.system.mass, self.minv, self.cm, self.damped,
+                         self.method.own_acceleration, self.bvec, self.system.mult, self.params, self.wgt, load,
+                         t0, s.dt / nsub, nsub, n, s.max_omega_dt, self.level0[nsub], s.max_substep_level,
+                         s.newton_tol, s.newton_max_iter, x, st, np.zeros((ne, N_STATE)), np.zeros((ne, 2)),
+                         buf.d, buf.v, buf.a, buf.u, buf.f, buf.e, self.info)
+
+    def segments(self):
+        """(first output step, steps, substeps each): runs of equal splitting, at most a chunk long."""
+        for lo, hi, nsub in zip(self.bounds[:-1], self.bounds[1:], self.substeps):
+            for k in range(int(lo), int(hi), self.chunk):
+                yield k, min(self.chunk, int(hi) - k), int(nsub)
+
+    def run(self, keep: bool = True, csv_path=None) -> Result:
+        system, s = self.system, self.settings
+        ne = self.bvec.shape[0]
+        x, st = self._state()
+        buf = _Buffers(self.chunk, ne)
+        rows = Rows(self.layout, self.n_steps, s.every, keep, csv_path, spectra=s.spectra, dt=s.dt)
+        start_row = Raw(t=np.zeros(1), d=x[None, X_D:X_D + 3].copy(), v=np.zeros((1, 3)), a=x[None, X_A:X_A + 3].copy(),
+                        u=st[None, 0, :, kernels.U].copy(), f=st[None, 0, :, kernels.F].copy(),
+                        e=np.zeros((1, kernels.N_E)))
+        wall = 0.0
+        try:
+            rows.add(start_row)
+            for first, n, nsub in self.segments():
+                t_c = s.dt * (first + np.arange(n * nsub + 1) / nsub)
+                load = np.ascontiguousarray(system.excitation.load_nodes(t_c, s.dt / nsub, system.mass))
+                tic = time.perf_counter()
+                written = self._call(load, s.dt * first, nsub, n, x, st, buf)
+                wall += time.perf_counter() - tic
+                _raise_on_failure(system, s, self.info)
+                assert written == n, "the loop wrote fewer rows than asked"
+                t = s.dt * (first + 1 + np.arange(n))  # t_n = n dt, never accumulated
+                rows.add(Raw(t=t, d=buf.d[:n], v=buf.v[:n], a=buf.a[:n], u=buf.u[:n], f=buf.f[:n], e=buf.e[:n]))
+        finally:
+            table = rows.close()
+        stats = RunStats(
+            steps=self.n_steps, record_substeps=self.nsub, min_substep_level=max(self.level0.values()),
+            substeps=int(x[X_SUBSTEPS]), max_substep_level=int(x[X_LEVEL_USED]),
+            max_omega_dt=float(math.sqrt(x[X_OMEGA_DT2])), steps_taken=int(x[X_STEPS]),
+            newton_iterations=int(x[X_ITER]) if self.method.name == "newmark" else 0, wall_s=wall,
+        )
+        return Result(system=system, settings=s, columns=self.layout.names, table=table, extremes=rows.extremes,
+                      plot=rows.plot, stats=stats, layout=self.layout, csv_path=csv_path, q_sample=rows.q_sample,
+                      spectra=rows.spectra_result())
+
+
+class _Buffers:
+    """One chunk of the loop's output rows."""
+
+    def __init__(self, n: int, ne: int):
+        self.d = np.empty((n, 3))
+        self.v = np.empty((n, 3))
+        self.a = np.empty((n, 3))
+        self.u = np.empty((n, ne))
+        self.f = np.empty((n, ne))
+        self.e = np.empty((n, kernels.N_E))
+
+
+def _chunk_rows(ne: int, n_cols: int, nsub: int) -> int:
+    """Output steps per chunk: CHUNK_BYTES of raw rows, table rows and load."""
+    per_row = 8 * (9 + 2 * ne + kernels.N_E + n_cols + 3 * nsub)
+    return int(min(65_536, max(64, CHUNK_BYTES // per_row)))
 
 
 def min_level(system: System, s: Settings, method, h: float) -> int:
@@ -122,22 +313,28 @@ def min_level(system: System, s: Settings, method, h: float) -> int:
     level = max(0, math.ceil(math.log2(w0 * h / s.max_omega_dt))) if w0 * h > s.max_omega_dt else 0
     if level > s.max_substep_level:
         raise AnalysisError(
-            f"omega_0 = {w0:.4g} rad/s of K0 (the elements' stiffness at a reversal) needs steps of "
+            f"omega_0 = {w0:.4g} rad/s of K0 (the elements' stiffness away from reversals) needs steps of "
             f"{s.max_omega_dt / w0:.3g} s with {s.integrator!r}: more than {2**s.max_substep_level} "
-            f"substeps of dt = {s.dt:g} s; reduce dt"
+            f"substeps of dt = {s.dt:g} s; dt = {s.max_omega_dt / w0 * 2**s.max_substep_level:.3g} s would do "
+            "(or a stiffer body is an input mistake: check the mass and kb)"
         )
     return level
 
 
 def _element_name(system: System, row: int) -> str:
-    """'element e3' or 'elements e3, e4, e7' (CSV numbers) with the first one's place."""
+    """'element e3' or 'elements e3, e4, e7' (CSV numbers) with the first one's place (deck frame)."""
     numbers = system.row_elements(row)
     el = next(el for el in system.elements if el.row == row)
+    g = system.body.mass_centre
     span = ("element " if len(numbers) == 1 else "elements ") + ", ".join(f"e{k}" for k in numbers)
-    return f"{span} ({el.hysteresis!r} at ({el.x[0]:.4g}, {el.x[1]:.4g}) m, {el.angle_deg:g} deg)"
+    return f"{span} ({el.hysteresis!r} at ({el.x[0] + g[0]:.4g}, {el.x[1] + g[1]:.4g}) m, {el.angle_deg:g} deg)"
 
 
-def _raise_on_failure(system: System, s: Settings, info: np.ndarray, nsub: int) -> None:
+#: an exponential term that has grown beyond e^this has left any calibrated range
+EXP_RANGE = 20.0
+
+
+def _raise_on_failure(system: System, s: Settings, info: np.ndarray) -> None:
     status = int(info[kernels.I_STATUS])
     if status == kernels.OK:
         return
@@ -152,6 +349,17 @@ def _raise_on_failure(system: System, s: Settings, info: np.ndarray, nsub: int) 
     if status == kernels.UNRESOLVED:
         omega = info[kernels.I_OMEGA]
         k = info[kernels.I_STIFFNESS]
+        u = info[kernels.I_DISP]
+        p = system.params[e]
+        row = 0 if info[kernels.I_BRANCH] > 0 else 1
+        b1, b2 = p[row, 3], p[row, 4]
+        if b1 != 0.0 and b2 * u > EXP_RANGE:
+            raise AnalysisError(
+                f"t = {t:.6g} s: {_element_name(system, e)} is driven to u = {u:.4g} m, where its term "
+                f"beta1 e^(beta2 u) (beta2 = {b2:g} 1/m) has grown by e^{b2 * u:.3g} and its stiffness to "
+                f"{k:.4g} N/m: beta2 is out of range for this motion (no step can follow it, and no "
+                "calibration reaches that far); check the set's beta2 and the deck's units"
+            )
         raise AnalysisError(
             f"t = {t:.6g} s: {_element_name(system, e)} reached a tangent stiffness of {k:.4g} N/m "
             f"(omega_max = {omega:.4g} rad/s), which {2**s.max_substep_level} substeps of "
@@ -167,24 +375,4 @@ def _raise_on_failure(system: System, s: Settings, info: np.ndarray, nsub: int) 
     raise AnalysisError(
         f"t = {t:.6g} s: the solution is no longer finite (NaN or Inf); the scene is numerically "
         f"unstable at dt = {s.dt:g} s with {s.integrator!r}"
-    )
-
-
-def settings_from_deck(deck, integrator: str | None = None, dt: float | None = None) -> Settings:
-    """The deck's [analysis] and output.every, with command-line overrides validated like the deck."""
-    from .deck import check_runnable
-
-    check_runnable(deck)
-    a = deck.analysis
-    if integrator is not None and integrator not in integrators.names():
-        raise InputError(f"--integrator: unknown {integrator!r}; choose one of {', '.join(integrators.names())}")
-    if dt is not None and not dt > 0:
-        raise InputError(f"--dt: {dt} must be > 0")
-    return Settings(
-        integrator=integrator or a.integrator,
-        dt=dt or a.dt,
-        duration=a.duration,
-        every=deck.output.every,
-        max_omega_dt=a.max_omega_dt,
-        max_substep_level=a.max_substep_level,
     )

@@ -24,13 +24,15 @@ import numpy as np
 
 from . import __version__, integrators
 from .errors import AnalysisError, InputError
+from .accuracy import REFERENCE_RTOL, Estimator, relative_errors  # noqa: F401 (re-exported)
 from .integrators import reference
 from .model import System
 from .results import Result
 from .simulate import Settings, grid, simulate
 
 COORDINATES = ("u1", "u2", "theta3")
-CSV_COLUMNS = ("integrator", "dt_s", "steps", "wall_s", "err_u1", "err_u2", "err_theta3", "err_max")
+CSV_COLUMNS = ("integrator", "dt_s", "steps", "wall_s", "err_u1", "err_u2", "err_theta3", "err_max",
+               "est_max", "est_over_true")
 #: default ladder: these multiples of the deck's dt
 LADDER = (4.0, 2.0, 1.0, 0.5, 0.25, 0.125)
 #: the asymptotic range of an order fit: errors below this (above it a method is still
@@ -59,14 +61,21 @@ class Run:
     max_substep_level: int = 0
     k0_substep_level: int = 0
     energy_balance: float = math.nan
+    #: the error estimate every run makes (rbhyst.accuracy), max over the coordinates
+    est_max: float = math.nan
 
     @property
     def err_max(self) -> float:
         e = [x for x in self.errors if not math.isnan(x)]
         return max(e) if e else math.nan
 
+    @property
+    def est_over_true(self) -> float:
+        return self.est_max / self.err_max if self.err_max > 0 else math.nan
+
     def row(self) -> list:
-        return [self.integrator, self.dt, self.steps, self.wall_s, *self.errors, self.err_max]
+        return [self.integrator, self.dt, self.steps, self.wall_s, *self.errors, self.err_max, self.est_max,
+                self.est_over_true]
 
 
 @dataclass
@@ -96,6 +105,8 @@ class Study:
             "dt_s": self.dts,
             "error": "relative max-norm per coordinate: max_t |q - q_ref| / max_t |q_ref| on the run's own "
                      "time grid t_n = n dt; err_max is the largest of u1, u2, theta3",
+            "estimate": "est_max: the error estimate an ordinary run reports (rbhyst.accuracy: against the adaptive "
+                        f"solution at rtol {REFERENCE_RTOL:g}); est_over_true shows its honesty",
             "wall_s": "time stepping only (compiled kernel loaded beforehand), best of up to "
                       f"{REPEAT} runs for runs under {REPEAT_BELOW_S} s",
             "observed_order": self.orders,
@@ -103,7 +114,8 @@ class Study:
             "runs": [
                 {"integrator": r.integrator, "dt_s": r.dt, "steps": r.steps, "wall_s": _num(r.wall_s),
                  "err_u1": _num(r.errors[0]), "err_u2": _num(r.errors[1]), "err_theta3": _num(r.errors[2]),
-                 "err_max": _num(r.err_max), "stiffness_substeps": r.substeps,
+                 "err_max": _num(r.err_max), "est_max": _num(r.est_max), "est_over_true": _num(r.est_over_true),
+                 "stiffness_substeps": r.substeps,
                  "max_substep_level": r.max_substep_level, "k0_substep_level": r.k0_substep_level,
                  "energy_balance": _num(r.energy_balance), "failed": r.failed}
                 for r in self.runs
@@ -171,24 +183,6 @@ def union_grid(steps: dict[float, int]) -> tuple[np.ndarray, dict[float, np.ndar
     return times, index
 
 
-def relative_errors(d: np.ndarray, d_ref: np.ndarray, system: System) -> tuple[float, float, float]:
-    """max_t |q - q_ref| / max_t |q_ref| per coordinate.
-
-    A coordinate the reference leaves at rest (below 1e-12 of the body's motion, e.g. the
-    rotation of a symmetric scene) is measured against the body's motion instead: the
-    largest translation, or the largest rotation times the radius of gyration.
-    """
-    diff = np.max(np.abs(d - d_ref), axis=0)
-    peak = np.max(np.abs(d_ref), axis=0)
-    rg = math.sqrt(system.mass[2] / system.mass[0])
-    body = max(peak[0], peak[1], peak[2] * rg)
-    scale = np.array([body, body, body / rg])
-    peak = np.where(peak > 1e-12 * scale, peak, scale)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        err = np.where(peak > 0, diff / peak, np.where(diff > 0, np.inf, 0.0))
-    return tuple(float(x) for x in err)
-
-
 def observed_order(runs: list[Run], floor: float) -> dict:
     """Slope of log err_max against log dt over the asymptotic range.
 
@@ -219,7 +213,8 @@ def _timed(system: System, settings: Settings, repeat: int) -> Result:
     while best < REPEAT_BELOW_S and n < repeat:
         best = min(best, simulate(system, settings).wall_s)
         n += 1
-    return dataclasses.replace(res, wall_s=best)
+    res.stats.wall_s = best
+    return res
 
 
 def run_study(system: System, settings: Settings, names: list[str] | None = None,
@@ -234,7 +229,7 @@ def run_study(system: System, settings: Settings, names: list[str] | None = None
     if duration is None:
         raise InputError("analysis.duration: required when no record or finite pulse gives it")
     dts = check_dts(list(dts) if dts is not None else default_dts(settings.dt), duration)
-    base = dataclasses.replace(settings, every=1)
+    base = dataclasses.replace(settings, every=1, points=(), spectra=None)  # (they would only cost time)
     steps = {dt: grid(system, dataclasses.replace(base, dt=dt))[0] for dt in dts}
     times, index = union_grid(steps)
     total = 1 + len(names) * len(dts)
@@ -253,6 +248,8 @@ def run_study(system: System, settings: Settings, names: list[str] | None = None
         again = reference.solve_with_stats(system, ref_settings, rtol=rtol, t_out=times)[1]
         ref_stats["wall_s"] = min(ref_stats["wall_s"], again["wall_s"])
     done += 1
+    tick(f"estimate's adaptive solution (rtol {REFERENCE_RTOL:g})")
+    estimate_q = Estimator(system, times).solution(REFERENCE_RTOL).q
     runs = []
     for name in names:
         for dt in dts:
@@ -265,6 +262,7 @@ def run_study(system: System, settings: Settings, names: list[str] | None = None
             else:
                 n = min(len(res.d), len(index[dt]))
                 run.errors = relative_errors(res.d[:n], ref.d[index[dt][:n]], system)
+                run.est_max = max(relative_errors(res.d[:n], estimate_q[index[dt][:n]], system))
                 run.wall_s = res.wall_s
                 run.substeps = res.substeps
                 run.max_substep_level = res.max_substep_level

@@ -162,7 +162,8 @@ def test_calibrate_command_end_to_end(tmp_path):
     r = run_cli("calibrate", data, "--set", "wri_shear", "--init", init, "--free", NON_GAMMA, "--starts", "2")
     assert r.exit_code == 0, r.output
     out = tmp_path / "results" / "wri_shear_test-calibrate"
-    assert sorted(p.name for p in out.iterdir()) == ["fit.json", "fitted.toml", "loops.png", "loops_wri_shear.csv"]
+    assert sorted(p.name for p in out.iterdir()) == [".rbhyst.json", "fit.json", "fitted.toml", "loops.png",
+                                                     "loops_wri_shear.csv"]
     fit = json.loads((out / "fit.json").read_text())
     assert 0.008 < fit["nrmse"] < 0.011 and fit["r2"] > 0.99 and fit["iterations"] >= 1
     assert fit["free"] == [n for n in NAMES if n.split(".")[1] in NON_GAMMA.split(",")]

@@ -55,7 +55,7 @@ def test_seed_deck_outputs_match_the_contract(tmp_path):
     code, _, err = run("run", DECKS / "seed_wri.toml", "--out", out, "--no-plots")
     assert code == 0, err
     header = (out / "time_history.csv").read_text().splitlines()[0].split(",")
-    expected = list(BASE_COLUMNS) + ["ag1_m_s2", "ag2_m_s2"]
+    expected = list(BASE_COLUMNS) + ["ag1_m_s2", "ag2_m_s2", "R1_N", "R2_N", "R3_Nm"]
     expected += [f"e{k}_{q}" for k in range(1, 9) for q in ("u_m", "f_N")]
     expected += list(ENERGY_COLUMNS)
     assert header == expected
@@ -70,7 +70,7 @@ def test_seed_deck_outputs_match_the_contract(tmp_path):
     assert s["peaks"]["u1_m"] == pytest.approx(np.max(np.abs(table[:, 1])), rel=1e-9)
     np.testing.assert_allclose(table[:, 10], table[:, 7] + table[:, 13], atol=1e-9)
     # elements counted twice report the same history
-    np.testing.assert_array_equal(table[:, 15:17], table[:, 17:19])
+    np.testing.assert_array_equal(table[:, 18:20], table[:, 20:22])
     assert not list(out.glob("*.png"))
 
 

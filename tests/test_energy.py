@@ -65,5 +65,6 @@ def test_interrupted_writing_leaves_the_old_folder(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["results"]
     with staged_directory(target) as tmp:
         (tmp / "new.txt").write_text("new")
-    assert [p.name for p in target.iterdir()] == ["new.txt"]
+    assert sorted(p.name for p in target.iterdir()) == [".rbhyst.json", "keep.txt", "new.txt"]  # not rbhyst's: kept
+    assert (target / "keep.txt").read_text() == "old"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["results"]

@@ -6,6 +6,7 @@ from scipy.integrate import solve_ivp
 
 from rbhyst import hysteresis as hy
 from rbhyst.hysteresis import limiting_curve, loop, parameter_set
+from rbhyst.kernels import vrm
 from conftest import TABLE1, TABLE3_AXIAL, TABLE3_SHEAR
 
 
@@ -138,8 +139,8 @@ def test_compiled_and_python_kernels_agree():
     p = pset(TABLE1["2b"]).reshape(1, 2, 8)
     state = (0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
     for u1 in (0.3, 0.7, 0.2, -0.4, -0.1):
-        fast = hy.vrm_update(p, 0, *state, u1)
-        slow = hy.vrm_update.py_func(p, 0, *state, u1)
+        fast = vrm.vrm_update(p, 0, *state, u1)
+        slow = vrm.vrm_update.py_func(p, 0, *state, u1)
         assert fast == pytest.approx(slow, rel=1e-14, abs=1e-15)
         f, s, g, k, a, _, _, _ = fast
         state = (u1, f, s, g, k, a)

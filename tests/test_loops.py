@@ -213,7 +213,8 @@ def test_calibrate_plot_selected_set_and_default_folder(tmp_path):
     r = run_cli("calibrate-plot", deck, "--set", "wri_shear")
     assert r.exit_code == 0, r.output
     out = tmp_path / "results" / "wri-loops"
-    assert sorted(p.name for p in out.iterdir()) == ["loops.png", "loops_wri_shear.csv", "summary.json"]
+    assert sorted(p.name for p in out.iterdir()) == [".rbhyst.json", "loops.png", "loops_wri_shear.csv",
+                                                     "summary.json"]
     r = run_cli("calibrate-plot", deck, "--set", "nope", "--out", tmp_path / "x")
     assert r.exit_code == 2 and r.stderr.startswith("error: ") and "nope" in r.stderr
     assert not (tmp_path / "x").exists()

@@ -61,7 +61,7 @@ def test_seed_scene_assembles_with_counted_elements(tmp_path):
     ([{"vertex": 1, "angle_deg": 0.0}, {"vertex": 2, "angle_deg": 0.0}, {"vertex": 3, "angle_deg": 0.0}],
      "translation along 90 deg"),
     ([{"point": [0.0, 0.0], "angle_deg": 0.0}, {"point": [0.0, 0.0], "angle_deg": 90.0}],
-     "rotation about the centroid"),
+     "rotation about the mass centre G"),
     ([{"vertex": 1, "angle_deg": 90.0}, {"vertex": 1, "angle_deg": 0.0}], "rotation about the point"),
 ])
 def test_an_unrestrained_direction_is_named(tmp_path, elements, free):

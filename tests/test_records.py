@@ -8,11 +8,11 @@ from conftest import DECKS, records_or_skip
 
 def test_el_centro_at2_header_and_values():
     folder = records_or_skip()
-    s = read_at2(folder / "I-ELC180.AT2")
+    s = read_at2(folder / "I-ELC180.AT2").series
     assert s.dt == 0.01 and len(s.values) == 4000
     assert np.max(np.abs(s.values)) == pytest.approx(0.3129, abs=5e-5)
     assert s.values[0] == pytest.approx(-0.6403182e-02)  # real records rarely start at zero
-    s270 = read_at2(folder / "I-ELC270.AT2")
+    s270 = read_at2(folder / "I-ELC270.AT2").series
     assert np.max(np.abs(s270.values)) == pytest.approx(0.2148, abs=5e-5)
 
 
@@ -29,11 +29,11 @@ def test_at2_older_header_layout(tmp_path):
 def test_two_columns_with_header_and_one_column_with_dt(tmp_path):
     p = tmp_path / "a.csv"
     p.write_text("time_s,acc\n0.0,1.0\n0.5,2.0\n1.0,0.0\n")
-    s = read_table(p)
+    s = read_table(p).series
     assert (s.t0, s.dt) == (0.0, 0.5)
     q = tmp_path / "b.txt"
     q.write_text("1.0\n2.0\n0.0\n")
-    s = read_table(q, dt=0.5)
+    s = read_table(q, dt=0.5).series
     np.testing.assert_allclose(s(np.array([0.25, 0.75])), [1.5, 1.0])
 
 

@@ -95,7 +95,9 @@ def test_exponential_branch_driven_out_of_range_stops_cleanly(tmp_path):
         simulate(system, Settings(dt=1e-3, duration=1.0))
     msg = str(err.value)
     assert "element e1" in msg and "t = " in msg
-    assert ("left its calibrated range" in msg) or ("cannot resolve" in msg and "a step of" in msg)
+    # beta2 out of range: said as such, not as a request for an absurdly small step
+    assert ("left its calibrated range" in msg) or ("beta2 is out of range" in msg and "e^" in msg)
+    assert "a step of" not in msg
 
 
 def test_stiffness_ratio_1e4_between_reversal_and_branch(tmp_path):
@@ -167,7 +169,7 @@ def test_a_scene_at_rest_stays_exactly_at_rest(tmp_path):
     system = system_of(data, tmp_path)
     for method in EXPLICIT:
         res = simulate(system, Settings(integrator=method, dt=1e-3, duration=2.0))
-        _, table = res.columns()
+        table = res.table
         assert not np.any(table[:, 1:]), method
 
 

@@ -11,12 +11,13 @@ import pytest
 from typer.testing import CliRunner
 
 from rbhyst.cli import app
+
 from rbhyst.deck import parse_deck
 from rbhyst.model import assemble
 from rbhyst.simulate import Settings
 from rbhyst.study import (CSV_COLUMNS, Run, default_dts, fixed_step_names, observed_order, relative_errors,
                           run_study, union_grid, write_csv)
-from conftest import seed_deck, square_linear_deck, write_deck
+from conftest import DECKS, seed_deck, square_linear_deck, write_deck
 
 runner = CliRunner()
 
@@ -40,7 +41,7 @@ def test_study_writes_its_files(tmp_path):
         (m, dt) for m in ("chang", "newmark") for dt in (0.002, 0.001, 0.0005, 0.00025)]
     for r in rows[1:]:
         assert int(r[2]) == round(1.0 / float(r[1]))
-        vals = [float(x) for x in r[3:]]
+        vals = [float(x) for x in r[3:8]]  # wall_s, the three errors, err_max
         assert all(math.isfinite(v) and v > 0 for v in vals)
         assert vals[-1] == max(vals[1:4])
     summary = json.loads((out / "study.json").read_text())
@@ -87,9 +88,10 @@ def test_study_rejects_bad_options_cleanly(tmp_path, args, message):
 
 
 def test_a_failed_run_is_a_row_not_a_crash(tmp_path):
-    """Central difference past its stability limit with no substeps allowed: the run stops, the study goes on."""
+    """Central difference past its stability limit with no substeps allowed: the run stops, the study goes on.
+    (A sine slow enough that dt = 3/w follows it without substeps: 0.2 Hz, 47 steps a period.)"""
     deck = square_linear_deck(k=2.0e5, mass=500.0)
-    deck["excitation"] = {"support": {"x1": {"type": "sine", "amplitude": 1.0, "frequency_hz": 2.0,
+    deck["excitation"] = {"support": {"x1": {"type": "sine", "amplitude": 1.0, "frequency_hz": 0.2,
                                              "units": "m/s2"}}}
     system = assemble(parse_deck(deck), tmp_path)
     w = math.sqrt(4e5 / 500.0)
@@ -143,3 +145,17 @@ def test_observed_order_uses_the_asymptotic_range():
 
 def test_every_fixed_step_method_is_studied_by_default():
     assert fixed_step_names() == ["chang", "central-difference", "newmark", "kr-alpha"]
+
+
+def test_study_shows_each_run_s_estimate_against_its_true_error(tmp_path):
+    deck = DECKS / "machine_on_mounts.toml"
+    out = tmp_path / "st"
+    res = CliRunner().invoke(app, ["study", str(deck), "--integrators", "chang,newmark", "--dt", "0.004,0.002,0.001",
+                                   "--out", str(out), "--no-plots"])
+    assert res.exit_code == 0, res.stderr
+    rows = (out / "study.csv").read_text().splitlines()
+    header = rows[0].split(",")
+    assert header[-2:] == ["est_max", "est_over_true"]
+    for line in rows[1:]:
+        cells = dict(zip(header, line.split(",")))
+        assert 0.5 <= float(cells["est_over_true"]) <= 10.0, line

@@ -13,7 +13,7 @@ from typing import Callable
 
 import numpy as np
 
-N_COEF = 6  # coefficient matrices per substep level
+N_COEF = 7  # coefficient matrices per substep level
 
 
 @dataclass(frozen=True)
@@ -25,9 +25,11 @@ class Method:
     kernel_id: int | None = None
     #: the step depends on K0 (Chang, Chen-Ricles, KR-alpha): omega_0 h must stay resolved
     structure_dependent: bool = False
-    #: (mass (3,), K0 (3, 3), h) -> (N_COEF, 3, 3)
-    coefficients: Callable[[np.ndarray, np.ndarray, float], np.ndarray] | None = None
-    #: (system, dt, options) -> Result, for methods outside the fixed-step loop
+    #: its acceleration variable is its own (KR-alpha): rows report equilibrium instead
+    own_acceleration: bool = False
+    #: (mass (3,), K0 (3, 3), C (3, 3), h) -> (N_COEF, 3, 3)
+    coefficients: Callable[[np.ndarray, np.ndarray, np.ndarray, float], np.ndarray] | None = None
+    #: (system, settings, keep=, csv_path=) -> Result, for methods outside the fixed-step loop
     solve: Callable | None = None
 
 
@@ -39,6 +41,7 @@ _MODULES = {
     "newmark": "newmark",
     "kr-alpha": "kr_alpha",
     "reference": "reference",
+    "adaptive": "adaptive",
 }
 
 

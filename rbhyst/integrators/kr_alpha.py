@@ -41,10 +41,12 @@ import functools
 
 import numpy as np
 
-from .. import kernels
 from . import N_COEF, Method
 
 RHO_INF = 0.5
+KERNEL_ID = 3
+# coefficient slots
+V_A, D_A, A_A, X_NEW, X_OLD, V_ANEW, A_V = range(7)
 
 
 def parameters(rho_inf: float) -> tuple[float, float, float, float]:
@@ -58,22 +60,29 @@ def parameters(rho_inf: float) -> tuple[float, float, float, float]:
     return am, af, gamma, beta
 
 
-def coefficients(mass: np.ndarray, k0: np.ndarray, h: float, rho_inf: float = RHO_INF) -> np.ndarray:
+def coefficients(mass: np.ndarray, k0: np.ndarray, c: np.ndarray, h: float, rho_inf: float = RHO_INF) -> np.ndarray:
+    """The step's matrices; with the velocity at t (module docstring) and viscous damping C:
+
+        Mh a+ = (1 - af)(p+ - R+) + af (p - R) - (M A3 + (1 - af) h C (A1 - gamma I)) a - C v,
+        Mh = M (I - A3) + (1 - af) gamma h C.
+    """
     am, af, gamma, beta = parameters(rho_inf)
     m = np.diag(mass)
-    big_a = m + beta * h * h * k0
+    eye = np.eye(3)
+    big_a = m + gamma * h * c + beta * h * h * k0
     a1 = np.linalg.solve(big_a, m)
     a2 = (0.5 + gamma) * a1
-    a3 = np.linalg.solve(big_a, am * m + af * beta * h * h * k0)
-    mh_inv = np.linalg.inv(m @ (np.eye(3) - a3))
-    c = np.zeros((N_COEF, 3, 3))
-    c[0] = a1 - gamma * np.eye(3)
-    c[1] = a2 - gamma * np.eye(3)
-    c[2] = mh_inv @ m @ a3
-    c[3] = (1.0 - af) * mh_inv
-    c[4] = af * mh_inv
-    c[5] = gamma * np.eye(3)
-    return c
+    a3 = np.linalg.solve(big_a, am * m + af * gamma * h * c + af * beta * h * h * k0)
+    mh_inv = np.linalg.inv(m @ (eye - a3) + (1.0 - af) * gamma * h * c)
+    out = np.zeros((N_COEF, 3, 3))
+    out[V_A] = a1 - gamma * eye
+    out[D_A] = a2 - gamma * eye
+    out[A_A] = mh_inv @ (m @ a3 + (1.0 - af) * h * c @ (a1 - gamma * eye))
+    out[X_NEW] = (1.0 - af) * mh_inv
+    out[X_OLD] = af * mh_inv
+    out[V_ANEW] = gamma * eye
+    out[A_V] = mh_inv @ c
+    return out
 
 
 def method(rho_inf: float = RHO_INF, name: str | None = None) -> Method:
@@ -84,8 +93,9 @@ def method(rho_inf: float = RHO_INF, name: str | None = None) -> Method:
                 "tunable high-frequency dissipation",
         order=2,
         explicit=True,
-        kernel_id=kernels.KR_ALPHA,
+        kernel_id=KERNEL_ID,
         structure_dependent=True,
+        own_acceleration=True,
         coefficients=functools.partial(coefficients, rho_inf=rho_inf),
     )
 

@@ -31,23 +31,24 @@ from __future__ import annotations
 
 import math
 import time
+from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
-from . import dop853_tableau as _dop
 
+from . import dop853_tableau as _dop
 from ..errors import AnalysisError
-from ..hysteresis import ALPHA, EXP_ARG_MAX, branch_eval, branch_row
+from ..kernels.compiled import kernel
+from ..kernels.dop853_layout import (NP, NS, NY, R_ELEMENT, R_EVENTS, R_FEV, R_HMAX, R_HMIN, R_INFO, R_REJECTED,
+                                     R_START_FLIPS, R_STATUS, R_STEPS, R_TIME, ST_NONFINITE, ST_OK, ST_OVERFLOW,
+                                     ST_STEP_TOO_SMALL, ST_TOO_MANY_STEPS)
 from ..records import Series
-from ..results import Result
+from ..history import Layout, Raw
+from ..results import Result, RunStats
 from . import Method
 
 RTOL = 1e-12
-NP = 8  # load polynomial: degree NP - 1 on each piece
 MAX_PIECE = 0.02  # s, longest piece of the load before the fit check splits it
 FIT_TOL = 1e-12  # of the load's peak
-NS = 8  # samples of b . v per step when looking for a crossing
-SIMULTANEOUS = 1e-9  # reversals this close (fraction of the step) are one event
 MAX_STEPS = 50_000_000
 
 # DOP853 tables (12 stages, the 13th row is f at the end of the step, 3 more for dense output)
@@ -58,475 +59,9 @@ _E3 = np.ascontiguousarray(_dop.E3, dtype=float)
 _E5 = np.ascontiguousarray(_dop.E5, dtype=float)
 _D = np.ascontiguousarray(_dop.D, dtype=float)
 
-NY = 7  # q (3), v (3), input energy
-NERR = 6  # components under error control (not the energy)
-
-# info layout
-R_STATUS, R_TIME, R_ELEMENT, R_STEPS, R_REJECTED, R_EVENTS, R_FEV, R_HMIN, R_HMAX, R_START_FLIPS = range(10)
-R_INFO = 10
-ST_OK, ST_OVERFLOW, ST_STEP_TOO_SMALL, ST_TOO_MANY_STEPS, ST_NONFINITE = range(5)
-
 
 # --------------------------------------------------------------------------
 # compiled core
-# --------------------------------------------------------------------------
-
-
-@njit(cache=True, error_model="numpy", inline="always")
-def _force(params, e, s, up, gp, u):
-    """Force of element e on the branch (s, u_P, g_P) at u (eq. 14) and C_s(u); ok False on overflow."""
-    row = branch_row(s)
-    c, kc, big, ok = branch_eval(params, e, row, s, u)
-    x = -s * params[e, row, ALPHA] * (u - up)
-    if not ok or x > EXP_ARG_MAX:
-        return 0.0, 0.0, False
-    return c - gp * math.exp(x), big, True
-
-
-@njit(cache=True, error_model="numpy", inline="always")
-def _load(t, k, brk, pcoef, out):
-    ta = brk[k]
-    tb = brk[k + 1]
-    x = (2.0 * t - ta - tb) / (tb - ta)
-    for c in range(3):
-        acc = pcoef[k, NP - 1, c]
-        for j in range(NP - 2, -1, -1):
-            acc = acc * x + pcoef[k, j, c]
-        out[c] = acc
-
-
-@njit(cache=True, error_model="numpy")
-def _rhs(t, y, k, brk, pcoef, minv, bvec, mult, params, s, up, gp, p, dy):
-    """dy = (v, M^-1 (p - R), p . v); returns the first element that overflowed, or -1."""
-    _load(t, k, brk, pcoef, p)
-    r0 = 0.0
-    r1 = 0.0
-    r2 = 0.0
-    for e in range(bvec.shape[0]):
-        b0 = bvec[e, 0]
-        b1 = bvec[e, 1]
-        b2 = bvec[e, 2]
-        f, _, ok = _force(params, e, s[e], up[e], gp[e], b0 * y[0] + b1 * y[1] + b2 * y[2])
-        if not ok:
-            return e
-        mf = mult[e] * f
-        r0 += mf * b0
-        r1 += mf * b1
-        r2 += mf * b2
-    dy[0] = y[3]
-    dy[1] = y[4]
-    dy[2] = y[5]
-    dy[3] = minv[0] * (p[0] - r0)
-    dy[4] = minv[1] * (p[1] - r1)
-    dy[5] = minv[2] * (p[2] - r2)
-    dy[6] = p[0] * y[3] + p[1] * y[4] + p[2] * y[5]
-    return -1
-
-
-@njit(cache=True, error_model="numpy", inline="always")
-def _dense(F, y_old, x, i):
-    """Component i of the DOP853 dense output at x in [0, 1] of the step."""
-    acc = F[6, i]
-    acc = F[5, i] + x * acc
-    acc = F[4, i] + (1.0 - x) * acc
-    acc = F[3, i] + x * acc
-    acc = F[2, i] + (1.0 - x) * acc
-    acc = F[1, i] + x * acc
-    acc = F[0, i] + (1.0 - x) * acc
-    return y_old[i] + x * acc
-
-
-@njit(cache=True, error_model="numpy", inline="always")
-def _g_dense(F, y_old, x, bvec, e, s):
-    """s_e (b_e . v) on the dense output: positive while the element moves along its branch."""
-    w = bvec[e, 0] * _dense(F, y_old, x, 3) + bvec[e, 1] * _dense(F, y_old, x, 4) + bvec[e, 2] * _dense(F, y_old, x, 5)
-    return s * w
-
-
-@njit(cache=True, error_model="numpy")
-def _integrate(minv, bvec, mult, params, brk, pcoef, t_out, rtol, atol, s_init, h_first,
-               A, B, C, E3, E5, D, out_y, out_a, out_eu, out_ef, out_eh, info):
-    ne = bvec.shape[0]
-    n_int = brk.shape[0] - 1
-    n_out = t_out.shape[0]
-    s = s_init.copy()
-    up = np.zeros(ne)
-    gp = np.zeros(ne)
-    ap = np.zeros(ne)  # C_s(u_P): antiderivative at the branch start
-    wacc = np.zeros(ne)  # work of the element up to its branch start
-    for e in range(ne):
-        row = branch_row(s[e])
-        c, kc, big, ok = branch_eval(params, e, row, s[e], 0.0)
-        gp[e] = c  # the virgin state f = 0 at u = 0
-        ap[e] = big
-
-    y = np.zeros(NY)
-    y_new = np.zeros(NY)
-    y_ev = np.zeros(NY)
-    ytmp = np.zeros(NY)
-    f = np.zeros(NY)
-    f_new = np.zeros(NY)
-    K = np.zeros((16, NY))
-    F = np.zeros((7, NY))
-    p = np.zeros(3)
-    yo = np.zeros(NY)
-    gs = np.zeros(NS + 1)
-    xroot = np.zeros(ne)  # where in the step each element reverses (2: not in this step)
-    t = 0.0
-    h = h_first
-    io = 0
-    n_steps = 0
-    n_rej = 0
-    n_ev = 0
-    n_fev = 0
-    n_start = 0
-    h_min_seen = math.inf
-    h_max_seen = 0.0
-    exponent = -1.0 / 8.0
-
-    for k in range(n_int):
-        tb = brk[k + 1]
-        bad = _rhs(t, y, k, brk, pcoef, minv, bvec, mult, params, s, up, gp, p, f)
-        n_fev += 1
-        if bad >= 0:
-            info[R_STATUS] = ST_OVERFLOW
-            info[R_ELEMENT] = bad
-            info[R_TIME] = t
-            return io
-        if io < n_out and t_out[io] <= t:
-            # outputs at the start (t = 0) come from the state itself
-            while io < n_out and t_out[io] <= t:
-                for i in range(NY):
-                    yo[i] = y[i]
-                io = _write(io, t, k, yo, brk, pcoef, minv, bvec, mult, params, s, up, gp, ap, wacc,
-                            p, out_y, out_a, out_eu, out_ef, out_eh)
-        while tb - t > 1e-13 * max(1.0, abs(tb)):
-            if n_steps + n_rej > MAX_STEPS:
-                info[R_STATUS] = ST_TOO_MANY_STEPS
-                info[R_TIME] = t
-                return io
-            hh = h
-            if t + hh >= tb - 1e-13 * max(1.0, abs(tb)):
-                hh = tb - t
-            if hh < 1e-14 * max(1.0, abs(t)):
-                info[R_STATUS] = ST_STEP_TOO_SMALL
-                info[R_TIME] = t
-                return io
-            # ---- one DOP853 step
-            for i in range(NY):
-                K[0, i] = f[i]
-            bad = _stages(1, 12, t, hh, y, k, brk, pcoef, minv, bvec, mult, params, s, up, gp, p, A, C, K, ytmp)
-            n_fev += 11
-            if bad < 0:
-                for i in range(NY):
-                    acc = 0.0
-                    for j in range(12):
-                        acc += B[j] * K[j, i]
-                    y_new[i] = y[i] + hh * acc
-                bad = _rhs(t + hh, y_new, k, brk, pcoef, minv, bvec, mult, params, s, up, gp, p, f_new)
-                n_fev += 1
-            if bad >= 0:
-                # an exponential overflowed inside the step: try a smaller one first
-                if hh > 1e-9:
-                    h = 0.25 * hh
-                    n_rej += 1
-                    continue
-                info[R_STATUS] = ST_OVERFLOW
-                info[R_ELEMENT] = bad
-                info[R_TIME] = t
-                return io
-            for i in range(NY):
-                K[12, i] = f_new[i]
-            err5 = 0.0
-            err3 = 0.0
-            for i in range(NERR):
-                sc = atol[i] + rtol * max(abs(y[i]), abs(y_new[i]))
-                a5 = 0.0
-                a3 = 0.0
-                for j in range(13):
-                    a5 += E5[j] * K[j, i]
-                    a3 += E3[j] * K[j, i]
-                a5 /= sc
-                a3 /= sc
-                err5 += a5 * a5
-                err3 += a3 * a3
-            if err5 == 0.0 and err3 == 0.0:
-                err = 0.0
-            else:
-                err = hh * err5 / math.sqrt((err5 + 0.01 * err3) * NERR)
-            if not (err < math.inf):
-                h = 0.25 * hh
-                n_rej += 1
-                continue
-            if err > 1.0:
-                h = hh * max(0.2, 0.9 * err ** exponent)
-                n_rej += 1
-                continue
-            factor = 10.0 if err == 0.0 else min(10.0, 0.9 * err ** exponent)
-            # ---- events: an element's velocity crossing zero against its branch
-            need = False
-            for e in range(ne):
-                g0 = s[e] * (bvec[e, 0] * y[3] + bvec[e, 1] * y[4] + bvec[e, 2] * y[5])
-                g1 = s[e] * (bvec[e, 0] * y_new[3] + bvec[e, 1] * y_new[4] + bvec[e, 2] * y_new[5])
-                if g1 < 0.0:
-                    need = True
-                    break
-                # cubic Hermite of g over the step, from g and g' at both ends
-                d0 = hh * s[e] * (bvec[e, 0] * f[3] + bvec[e, 1] * f[4] + bvec[e, 2] * f[5])
-                d1 = hh * s[e] * (bvec[e, 0] * f_new[3] + bvec[e, 1] * f_new[4] + bvec[e, 2] * f_new[5])
-                seen = g0 > 0.0
-                for m in range(1, NS):
-                    x = m / NS
-                    h00 = (1.0 + 2.0 * x) * (1.0 - x) * (1.0 - x)
-                    h10 = x * (1.0 - x) * (1.0 - x)
-                    h01 = x * x * (3.0 - 2.0 * x)
-                    h11 = x * x * (x - 1.0)
-                    gm = h00 * g0 + h10 * d0 + h01 * g1 + h11 * d1
-                    if gm < 0.0 and seen:
-                        need = True
-                        break
-                    if gm > 0.0:
-                        seen = True
-                if need:
-                    break
-            have_dense = False
-            ev = -1
-            x_ev = 2.0
-            if need:
-                _dense_coefficients(t, hh, y, y_new, f, f_new, k, brk, pcoef, minv, bvec, mult, params,
-                                    s, up, gp, p, A, C, D, K, F, ytmp)
-                n_fev += 3
-                have_dense = True
-                for e in range(ne):
-                    xroot[e] = 2.0
-                    se = s[e]
-                    gs[0] = se * (bvec[e, 0] * y[3] + bvec[e, 1] * y[4] + bvec[e, 2] * y[5])
-                    gs[NS] = se * (bvec[e, 0] * y_new[3] + bvec[e, 1] * y_new[4] + bvec[e, 2] * y_new[5])
-                    for m in range(1, NS):
-                        gs[m] = _g_dense(F, y, m / NS, bvec, e, se)
-                    seen = gs[0] > 0.0
-                    found = -1
-                    for m in range(1, NS + 1):
-                        if gs[m] < 0.0 and seen:
-                            found = m
-                            break
-                        if gs[m] > 0.0:
-                            seen = True
-                    if found < 0:
-                        if not seen and gs[NS] < 0.0:
-                            # moving against its branch from the very start: flip it at t
-                            xroot[e] = 0.0
-                            if 0.0 < x_ev:
-                                x_ev = 0.0
-                                ev = e
-                        continue
-                    # root of g in [xa, xb], g(xa) >= 0 > g(xb): bisection-secant (Illinois)
-                    xa = (found - 1) / NS
-                    xb = found / NS
-                    ga = gs[found - 1]
-                    gb = gs[found]
-                    side = 0
-                    for _ in range(200):
-                        if xb - xa <= 4e-16:
-                            break
-                        xm = (xa * gb - xb * ga) / (gb - ga) if ga != gb else 0.5 * (xa + xb)
-                        if not (xa < xm < xb):
-                            xm = 0.5 * (xa + xb)
-                        gm = _g_dense(F, y, xm, bvec, e, se)
-                        if gm == 0.0:
-                            xa = xm
-                            xb = xm
-                            break
-                        if gm > 0.0:
-                            xa = xm
-                            ga = gm
-                            if side == 1:
-                                gb *= 0.5
-                            side = 1
-                        else:
-                            xb = xm
-                            gb = gm
-                            if side == -1:
-                                ga *= 0.5
-                            side = -1
-                    xr = 0.5 * (xa + xb)
-                    xroot[e] = xr
-                    if xr < x_ev:
-                        x_ev = xr
-                        ev = e
-            if ev >= 0 and x_ev == 0.0:
-                # a branch chosen against the motion (a virgin element, or round-off at a reversal)
-                for e in range(ne):
-                    if xroot[e] == 0.0:
-                        _new_branch(e, y, bvec, params, s, up, gp, ap, wacc)
-                        n_start += 1
-                bad = _rhs(t, y, k, brk, pcoef, minv, bvec, mult, params, s, up, gp, p, f)
-                n_fev += 1
-                if n_start > 100 * (n_ev + n_steps + 10):
-                    info[R_STATUS] = ST_STEP_TOO_SMALL
-                    info[R_TIME] = t
-                    return io
-                continue
-            if ev >= 0:
-                t_ev = t + x_ev * hh
-                # outputs before the reversal from this step's dense output
-                while io < n_out and t_out[io] < t_ev:
-                    x = (t_out[io] - t) / hh
-                    for i in range(NY):
-                        yo[i] = _dense(F, y, x, i)
-                    io = _write(io, t_out[io], k, yo, brk, pcoef, minv, bvec, mult, params, s, up, gp, ap,
-                                wacc, p, out_y, out_a, out_eu, out_ef, out_eh)
-                # redo the step to the reversal exactly
-                h_ev = t_ev - t
-                if h_ev > 0.0:
-                    _stages(1, 12, t, h_ev, y, k, brk, pcoef, minv, bvec, mult, params, s, up, gp, p, A, C, K, ytmp)
-                    n_fev += 11
-                    for i in range(NY):
-                        acc = 0.0
-                        for j in range(12):
-                            acc += B[j] * K[j, i]
-                        y_ev[i] = y[i] + h_ev * acc
-                else:
-                    for i in range(NY):
-                        y_ev[i] = y[i]
-                t = t_ev
-                for i in range(NY):
-                    y[i] = y_ev[i]
-                while io < n_out and t_out[io] <= t:
-                    io = _write(io, t_out[io], k, y, brk, pcoef, minv, bvec, mult, params, s, up, gp, ap, wacc,
-                                p, out_y, out_a, out_eu, out_ef, out_eh)
-                # elements that reverse together (identical b and sets, or by chance within
-                # SIMULTANEOUS of the step) all start their new branches here
-                for e in range(ne):
-                    if xroot[e] <= x_ev + SIMULTANEOUS:
-                        _new_branch(e, y, bvec, params, s, up, gp, ap, wacc)
-                        n_ev += 1
-                n_steps += 1
-                bad = _rhs(t, y, k, brk, pcoef, minv, bvec, mult, params, s, up, gp, p, f)
-                n_fev += 1
-                if h_ev > 0.0:
-                    h_min_seen = min(h_min_seen, h_ev)
-                continue
-            # ---- accept the whole step
-            while io < n_out and t_out[io] < t + hh:
-                if not have_dense:
-                    _dense_coefficients(t, hh, y, y_new, f, f_new, k, brk, pcoef, minv, bvec, mult, params,
-                                        s, up, gp, p, A, C, D, K, F, ytmp)
-                    n_fev += 3
-                    have_dense = True
-                x = (t_out[io] - t) / hh
-                for i in range(NY):
-                    yo[i] = _dense(F, y, x, i)
-                io = _write(io, t_out[io], k, yo, brk, pcoef, minv, bvec, mult, params, s, up, gp, ap, wacc,
-                            p, out_y, out_a, out_eu, out_ef, out_eh)
-            clipped = hh < h
-            t = tb if hh == tb - t else t + hh
-            for i in range(NY):
-                y[i] = y_new[i]
-                f[i] = f_new[i]
-            n_steps += 1
-            h_min_seen = min(h_min_seen, hh)
-            h_max_seen = max(h_max_seen, hh)
-            h = max(h, hh * factor) if clipped else hh * factor
-            while io < n_out and t_out[io] <= t:
-                io = _write(io, t_out[io], k, y, brk, pcoef, minv, bvec, mult, params, s, up, gp, ap, wacc,
-                            p, out_y, out_a, out_eu, out_ef, out_eh)
-            if not (math.isfinite(y[0]) and math.isfinite(y[1]) and math.isfinite(y[2])):
-                info[R_STATUS] = ST_NONFINITE
-                info[R_TIME] = t
-                return io
-    # outputs left by round-off at the very end
-    while io < n_out:
-        io = _write(io, t_out[io], n_int - 1, y, brk, pcoef, minv, bvec, mult, params, s, up, gp, ap, wacc,
-                    p, out_y, out_a, out_eu, out_ef, out_eh)
-    info[R_STATUS] = ST_OK
-    info[R_STEPS] = n_steps
-    info[R_REJECTED] = n_rej
-    info[R_EVENTS] = n_ev
-    info[R_FEV] = n_fev
-    info[R_HMIN] = h_min_seen
-    info[R_HMAX] = h_max_seen
-    info[R_START_FLIPS] = n_start
-    return io
-
-
-@njit(cache=True, error_model="numpy")
-def _stages(first, last, t, hh, y, k, brk, pcoef, minv, bvec, mult, params, s, up, gp, p, A, C, K, ytmp):
-    """Runge-Kutta stages first..last-1 of a step hh from (t, y) into the rows of K;
-    returns the first element whose exponential overflowed, or -1."""
-    for st in range(first, last):
-        for i in range(NY):
-            acc = 0.0
-            for j in range(st):
-                acc += A[st, j] * K[j, i]
-            ytmp[i] = y[i] + hh * acc
-        bad = _rhs(t + C[st] * hh, ytmp, k, brk, pcoef, minv, bvec, mult, params, s, up, gp, p, K[st])
-        if bad >= 0:
-            return bad
-    return -1
-
-
-@njit(cache=True, error_model="numpy")
-def _dense_coefficients(t, hh, y, y_new, f, f_new, k, brk, pcoef, minv, bvec, mult, params, s, up, gp, p,
-                        A, C, D, K, F, ytmp):
-    """The three extra stages and the 7 rows of DOP853's dense output (as scipy's DOP853)."""
-    _stages(13, 16, t, hh, y, k, brk, pcoef, minv, bvec, mult, params, s, up, gp, p, A, C, K, ytmp)
-    for i in range(NY):
-        dy = y_new[i] - y[i]
-        F[0, i] = dy
-        F[1, i] = hh * f[i] - dy
-        F[2, i] = 2.0 * dy - hh * (f_new[i] + f[i])
-        for r in range(4):
-            acc = 0.0
-            for j in range(16):
-                acc += D[r, j] * K[j, i]
-            F[3 + r, i] = hh * acc
-
-
-@njit(cache=True, error_model="numpy", inline="always")
-def _new_branch(e, y, bvec, params, s, up, gp, ap, wacc):
-    """Element e reverses at the current state: a new branch from the force it has (eq. 14)."""
-    u = bvec[e, 0] * y[0] + bvec[e, 1] * y[1] + bvec[e, 2] * y[2]
-    f_old, big_old, _ = _force(params, e, s[e], up[e], gp[e], u)
-    alpha = params[e, branch_row(s[e]), ALPHA]
-    wacc[e] += big_old - ap[e] + s[e] * gp[e] * (math.exp(-s[e] * alpha * (u - up[e])) - 1.0) / alpha
-    s[e] = -s[e]
-    row = branch_row(s[e])
-    c, kc, big, ok = branch_eval(params, e, row, s[e], u)
-    up[e] = u
-    gp[e] = c - f_old
-    ap[e] = big
-
-
-@njit(cache=True, error_model="numpy")
-def _write(io, t, k, y, brk, pcoef, minv, bvec, mult, params, s, up, gp, ap, wacc, p,
-           out_y, out_a, out_eu, out_ef, out_eh):
-    """One output row at time t from the state y on the current branches."""
-    _load(t, k, brk, pcoef, p)
-    r0 = 0.0
-    r1 = 0.0
-    r2 = 0.0
-    eh = 0.0
-    for e in range(bvec.shape[0]):
-        u = bvec[e, 0] * y[0] + bvec[e, 1] * y[1] + bvec[e, 2] * y[2]
-        fe, big, _ = _force(params, e, s[e], up[e], gp[e], u)
-        alpha = params[e, branch_row(s[e]), ALPHA]
-        w = wacc[e] + big - ap[e] + s[e] * gp[e] * (math.exp(-s[e] * alpha * (u - up[e])) - 1.0) / alpha
-        out_eu[io, e] = u
-        out_ef[io, e] = fe
-        eh += mult[e] * w
-        r0 += mult[e] * fe * bvec[e, 0]
-        r1 += mult[e] * fe * bvec[e, 1]
-        r2 += mult[e] * fe * bvec[e, 2]
-    for i in range(NY):
-        out_y[io, i] = y[i]
-    out_a[io, 0] = minv[0] * (p[0] - r0)
-    out_a[io, 1] = minv[1] * (p[1] - r1)
-    out_a[io, 2] = minv[2] * (p[2] - r2)
-    out_eh[io] = eh
-    return io + 1
-
-
 # --------------------------------------------------------------------------
 # the load as polynomial pieces
 # --------------------------------------------------------------------------
@@ -549,7 +84,11 @@ def load_pieces(system, t_end: float, max_piece: float = MAX_PIECE, tol: float =
     for sig in (ex.ag1, ex.ag2, ex.p1, ex.p2, ex.m3):
         if isinstance(sig, Series):
             tk = sig.t0 + sig.dt * np.arange(len(sig.values))
-            pts.append(tk[(tk > 0.0) & (tk < t_end)])
+        elif sig is not None:
+            tk = np.asarray(getattr(sig, "breakpoints", ()), dtype=float)  # a sine's or pulse's ends and corners
+        else:
+            continue
+        pts.append(tk[(tk > 0.0) & (tk < t_end)])
     brk = np.unique(np.concatenate(pts))
     keep = np.concatenate([[True], np.diff(brk) > 1e-12 * max(1.0, t_end)])
     brk = brk[keep]
@@ -612,11 +151,36 @@ def _scales(system, brk, coef, rtol):
     return np.concatenate([q, q * w1, [0.0]]), length, w1
 
 
+def _initial_state(system, coef):
+    """(4, rows) branch sign, u_P, gap and antiderivative of every element row at the start
+    (gap NaN: virgin, worked out in the kernel), and q at the start: rest, at the static
+    equilibrium under gravity when there is one, the elements as its path left them."""
+    from ..kernels import A, G, S, U
+
+    s0 = _initial_branches(system, coef)
+    init = np.zeros((4, len(s0)))
+    init[0] = s0
+    init[2] = np.nan
+    y0 = np.zeros(3)
+    static = getattr(system, "static", None)
+    if static is not None:
+        y0 = static.q.copy()
+        moved = static.st[:, S] != 0.0
+        init[0, moved] = static.st[moved, S]
+        init[1, moved] = static.st[moved, U]
+        init[2, moved] = static.st[moved, G]
+        init[3, moved] = static.st[moved, A]
+    return init, y0
+
+
 def _initial_branches(system, coef):
     """Each element starts moving the way the initial acceleration (else the load's slope) pushes it."""
     j = np.arange(NP)
     p0 = np.einsum("jc,j->c", coef[0], (-1.0) ** j)  # the load at t = 0 (x = -1) and its slope
     dp0 = np.einsum("jc,j->c", coef[0], j * (-1.0) ** (j - 1))
+    static = getattr(system, "static", None)
+    if static is not None:
+        p0 = p0 - static.r  # the weight is carried by the elements
     a0 = p0 / system.mass
     j0 = dp0 / system.mass
     s = np.sign(system.bvec @ a0)
@@ -625,29 +189,42 @@ def _initial_branches(system, coef):
     return s.astype(float)
 
 
-def solve_with_stats(system, settings, rtol: float = RTOL, t_out: np.ndarray | None = None
-                     ) -> tuple[Result, dict]:
-    """The reference Result and what it took (for study.json).
+class TooManySteps(AnalysisError):
+    """The adaptive integration ran past its budget of steps."""
 
-    Output at t_n = n dt every ``settings.every`` steps, or at the increasing times
-    ``t_out`` (from 0) if given: a study asks for the union of several grids.
+
+@dataclass
+class Solution:
+    """What the integration gives at the output times: state (q, v, input energy), equilibrium
+    accelerations, element rows' deformation and force, hysteretic work."""
+
+    t: np.ndarray
+    y: np.ndarray  # (n, NY)
+    a: np.ndarray
+    eu: np.ndarray
+    ef: np.ndarray
+    eh: np.ndarray
+    stats: dict
+
+    @property
+    def q(self) -> np.ndarray:
+        return self.y[:, :3]
+
+
+def integrate(system, t_out: np.ndarray, rtol: float = RTOL, pieces=None, max_steps: int = MAX_STEPS) -> Solution:
+    """Integrate from rest to t_out[-1] with output at the increasing times t_out (from 0).
+
+    ``pieces``: the load's (breakpoints, coefficients) from :func:`load_pieces`, when a caller
+    integrates the same scene twice; ``max_steps``: a budget of steps (events cost one each).
+    Raises AnalysisError where it cannot finish (TooManySteps past the budget).
     """
-    from ..simulate import grid
-
-    n_steps, _ = grid(system, settings)
-    if t_out is None:
-        if n_steps < settings.every:
-            from ..errors import InputError
-
-            raise InputError(f"output.every: {settings.every} is more than the {n_steps} steps of the analysis")
-        t_out = settings.dt * settings.every * np.arange(n_steps // settings.every + 1)
     t_out = np.ascontiguousarray(t_out, dtype=float)
     t_end = float(t_out[-1])
     n_rows = len(t_out)
-    brk, coef = load_pieces(system, t_end)
+    brk, coef = pieces if pieces is not None else load_pieces(system, t_end)
     atol, length, w1 = _scales(system, brk, coef, rtol)
-    s0 = _initial_branches(system, coef)
     ne = system.bvec.shape[0]
+    init, y0 = _initial_state(system, coef)
     out_y = np.zeros((n_rows, NY))
     out_a = np.zeros((n_rows, 3))
     out_eu = np.zeros((n_rows, ne))
@@ -655,8 +232,11 @@ def solve_with_stats(system, settings, rtol: float = RTOL, t_out: np.ndarray | N
     out_eh = np.zeros(n_rows)
     info = np.zeros(R_INFO)
     minv = 1.0 / system.mass
-    args = (minv, np.ascontiguousarray(system.bvec), system.mult, np.ascontiguousarray(system.params))
-    tail = (rtol, atol, s0, 1e-6, _A, _B, _C, _E3, _E5, _D, out_y, out_a, out_eu, out_ef, out_eh, info)
+    args = (minv, np.ascontiguousarray(system.bvec), system.mult, np.ascontiguousarray(system.params),
+            np.ascontiguousarray(system.C))
+    work = (np.zeros((6, ne)), np.zeros((7, NY)), np.zeros((16, NY)), np.zeros((7, NY)), np.zeros(3), np.zeros(NS + 1))
+    tail = (rtol, atol, init, y0, 1e-6, int(max_steps), _A, _B, _C, _E3, _E5, _D, out_y, out_a, out_eu, out_ef, out_eh, info, *work)
+    _integrate = kernel("integrate")
     # compile (or load) before the clock starts, on a one-piece problem
     _integrate(*args, brk[:2].copy(), coef[:1].copy(), t_out[:1].copy(), *tail)
     info[:] = 0.0
@@ -667,22 +247,14 @@ def solve_with_stats(system, settings, rtol: float = RTOL, t_out: np.ndarray | N
     if status != ST_OK or rows != n_rows:
         t = info[R_TIME]
         if status == ST_OVERFLOW:
-            raise AnalysisError(f"t = {t:.6g} s: the reference solution took element {int(info[R_ELEMENT]) + 1} "
+            raise AnalysisError(f"t = {t:.6g} s: the adaptive solution took element {int(info[R_ELEMENT]) + 1} "
                                 "(distinct elements, deck order) out of its calibrated range (exp overflow)")
+        if status == ST_TOO_MANY_STEPS:
+            raise TooManySteps(f"t = {t:.6g} s: the adaptive solution (rtol {rtol:g}) took more than "
+                               f"{int(max_steps)} steps (reversals are events: each costs a step)")
         why = {ST_STEP_TOO_SMALL: "its step size fell below round-off",
-               ST_TOO_MANY_STEPS: f"it took more than {MAX_STEPS} steps",
                ST_NONFINITE: "the solution is no longer finite"}.get(status, "it stopped early")
-        raise AnalysisError(f"t = {t:.6g} s: the reference solution failed: {why}")
-
-    mass = system.mass
-    d, v = out_y[:, :3], out_y[:, 3:6]
-    energy = np.column_stack([out_y[:, 6], 0.5 * (v * v) @ mass, out_eh])
-    ag = system.excitation.support(t_out) if system.excitation.has_support else None
-    result = Result(
-        system=system, settings=settings, time=t_out, d=d.copy(), v=v.copy(), a=out_a, ag=ag,
-        element_u=system.expand(out_eu), element_f=system.expand(out_ef), energy=energy,
-        steps=n_steps, wall_s=wall,
-    )
+        raise AnalysisError(f"t = {t:.6g} s: the adaptive solution (rtol {rtol:g}) failed: {why}")
     stats = {
         "method": "DOP853: explicit Runge-Kutta 8(5,3) with 7th-order dense output (Hairer-Norsett-Wanner), "
                   "compiled with numba",
@@ -691,8 +263,8 @@ def solve_with_stats(system, settings, rtol: float = RTOL, t_out: np.ndarray | N
         "atol_v": atol[3:6].tolist(),
         "atol_basis": {"displacement_scale_m": length, "lowest_circular_frequency_rad_s": w1},
         "events": "reversals: element velocity b.v crossing zero against its branch, located on the dense "
-                  "output and stepped to exactly; load breakpoints: record samples and pieces of a degree-7 "
-                  "fit to 1e-12 of the peak",
+                  "output and stepped to exactly; load breakpoints: record samples, the ends and corners of "
+                  "analytic signals, and pieces of a degree-7 fit to 1e-12 of the peak",
         "load_pieces": int(len(coef)),
         "steps": int(info[R_STEPS]),
         "rejected_steps": int(info[R_REJECTED]),
@@ -703,11 +275,49 @@ def solve_with_stats(system, settings, rtol: float = RTOL, t_out: np.ndarray | N
         "largest_step_s": float(info[R_HMAX]),
         "wall_s": wall,
     }
-    return result, stats
+    return Solution(t_out, out_y, out_a, out_eu, out_ef, out_eh, stats)
 
 
-def solve(system, settings) -> Result:
-    return solve_with_stats(system, settings)[0]
+def solve_with_stats(system, settings, rtol: float = RTOL, t_out: np.ndarray | None = None,
+                     keep: bool = True, csv_path=None) -> tuple[Result, dict]:
+    """A Result of the adaptive integration and what it took (for study.json).
+
+    Output at every t_n = n dt (rows every ``settings.every`` steps kept), or at the increasing
+    times ``t_out`` (from 0) if given, all kept: a study asks for the union of several grids.
+    """
+    from ..simulate import Rows, grid
+
+    n_steps, _ = grid(system, settings)
+    every = 1
+    spectra = None  # (a study's union of grids is not uniform: no spectra there)
+    if t_out is None:
+        if n_steps < settings.every:
+            from ..errors import InputError
+
+            raise InputError(f"output.every: {settings.every} is more than the {n_steps} steps of the analysis")
+        every = settings.every
+        t_out = settings.dt * np.arange(n_steps + 1)
+        spectra = settings.spectra
+    sol = integrate(system, t_out, rtol)
+    n_rows = len(sol.t)
+    v = sol.y[:, 3:6]
+    energy = np.column_stack([sol.y[:, 6], 0.5 * (v * v) @ system.mass, sol.eh, sol.y[:, 7]])
+    raw = Raw(t=sol.t, d=sol.q, v=v, a=sol.a, u=sol.eu, f=sol.ef, e=energy)
+    layout = Layout(system, settings.points)
+    rows = Rows(layout, n_rows - 1, every, keep, csv_path, spectra=spectra, dt=settings.dt)
+    try:
+        rows.add(raw)
+    finally:
+        table = rows.close()
+    stats = RunStats(steps=n_steps, steps_taken=sol.stats["steps"], wall_s=sol.stats["wall_s"])
+    result = Result(system=system, settings=settings, columns=layout.names, table=table, extremes=rows.extremes,
+                    plot=rows.plot, stats=stats, layout=layout, csv_path=csv_path, q_sample=rows.q_sample,
+                    solver=sol.stats, spectra=rows.spectra_result())
+    return result, sol.stats
+
+
+def solve(system, settings, keep: bool = True, csv_path=None) -> Result:
+    return solve_with_stats(system, settings, rtol=RTOL, keep=keep, csv_path=csv_path)[0]
 
 
 METHOD = Method(
@@ -717,3 +327,4 @@ METHOD = Method(
     explicit=True,
     solve=solve,
 )
+

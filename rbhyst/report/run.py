@@ -11,18 +11,37 @@ from ..results import Result
 from ._style import plt, save
 
 
-def plot_body(result: Result, path: Path) -> None:
-    """The body, its vertices and its elements (seed Fig. 3a)."""
-    system = result.system
-    v = system.body.vertices
-    fig, ax = plt.subplots(figsize=(5.5, 5.5))
+def _draw_outline(ax, v: np.ndarray, fill_alpha: float, labels: list[str]) -> None:
     closed = np.vstack([v, v[:1]])
-    ax.fill(closed[:, 0], closed[:, 1], color="0.9", zorder=1)
+    ax.fill(closed[:, 0], closed[:, 1], color="0.2", alpha=fill_alpha, lw=0, zorder=1)
     ax.plot(closed[:, 0], closed[:, 1], color="0.2", lw=1.2, zorder=2)
-    for i, (x, y) in enumerate(v, start=1):
-        ax.annotate(f"P{i}", (x, y), textcoords="offset points", xytext=(4, 4), fontsize=8, color="0.3")
+    for label, (x, y) in zip(labels, v):
+        ax.annotate(label, (x, y), textcoords="offset points", xytext=(4, 4), fontsize=8, color="0.3")
+
+
+def plot_body(result: Result, path: Path) -> None:
+    """The body (every part, the denser darker, with its mass), its mass centre G and its
+    elements (seed Fig. 3a)."""
+    system = result.system
+    body = system.body
+    fig, ax = plt.subplots(figsize=(5.5, 5.5))
+    if body.form == "parts":
+        # overlapping fills add up: a dense unit inside a shell shows darker
+        density = [p.mass / p.area for p in body.parts]
+        several = len(body.parts) > 1
+        for k, (part, rho) in enumerate(zip(body.parts, density), start=1):
+            prefix = f"{k}." if several else "P"
+            _draw_outline(ax, part.vertices, 0.08 + 0.3 * rho / max(density),
+                          [f"{prefix}{i}" for i in range(1, len(part.vertices) + 1)])
+            c = part.centroid - body.mass_centre
+            ax.annotate(f"part {k}\n{part.mass:.4g} kg", c, ha="center", va="center", fontsize=7,
+                        color="0.1", zorder=3)
+    else:
+        v = body.outlines[0]
+        _draw_outline(ax, v, 0.1, [f"P{i}" for i in range(1, len(v) + 1)])
     ax.plot(0, 0, "k+", ms=10, zorder=3)
     ax.annotate("G", (0, 0), textcoords="offset points", xytext=(5, -10))
+    v = np.vstack(body.outlines)
     size = float(np.ptp(v, axis=0).max())
     length = 0.18 * size
     k = 1
@@ -37,6 +56,15 @@ def plot_body(result: Result, path: Path) -> None:
         label = f"e{k}" if el.count == 1 else f"e{k}-{k + el.count - 1}"
         ax.annotate(label, (ex, ey), textcoords="offset points", xytext=(-6, -11), fontsize=7, color="C0")
         k += el.count
+    for k, dp in enumerate(system.dampers, start=1):
+        x, y = dp.x
+        a = math.radians(dp.angle_deg)
+        side = 1.0 if x * math.cos(a) + y * math.sin(a) >= 0.0 else -1.0
+        ex, ey = x + side * 0.8 * length * math.cos(a), y + side * 0.8 * length * math.sin(a)
+        ax.plot([ex, x], [ey, y], color="C2", lw=1.5, ls="--", zorder=4)
+        ax.plot((ex + x) / 2, (ey + y) / 2, marker="D", color="C2", ms=5, zorder=4)
+        ax.annotate(f"d{k}" + (f" x{dp.count}" if dp.count > 1 else ""), (ex, ey), textcoords="offset points",
+                    xytext=(3, 3), fontsize=7, color="C2")
     ex = result.system.excitation
     if ex.p1 is not None or ex.p2 is not None or ex.m3 is not None:
         ax.plot(*ex.point, marker="*", color="C3", ms=12, zorder=5)
@@ -46,41 +74,66 @@ def plot_body(result: Result, path: Path) -> None:
     ax.set_xlabel("x1 [m]")
     ax.set_ylabel("x2 [m]")
     title = system.title or "Model"
-    ax.set_title(f"{title}\nA = {system.body.area:.4g} m², m = {system.mass[0]:.6g} kg, "
-                 f"J = {system.mass[2]:.6g} kg m²", fontsize=9)
+    area = f"A = {body.parts[0].area:.4g} m², " if body.form == "polygon" else ""
+    ax.set_title(f"{title}\n{area}m = {system.mass[0]:.6g} kg, J = {system.mass[2]:.6g} kg m² about G",
+                 fontsize=9)
     save(fig, path)
+
+
+def _line(ax, result: Result, name: str, **kw) -> None:
+    """One column against time, drawn through every bucket's extremes: no peak is lost."""
+    t, y = result.plot.series(result.columns.index(name))
+    ax.plot(t, y, **kw)
 
 
 def plot_excitation(result: Result, path: Path) -> None:
     """Support acceleration along x1 and x2 (seed Fig. 5)."""
-    t = result.time
     fig, axes = plt.subplots(2, 1, figsize=(8, 4.5), sharex=True)
     for k, ax in enumerate(axes):
-        ax.plot(t, result.ag[:, k], lw=0.7, color="C0")
+        _line(ax, result, f"ag{k + 1}_m_s2", lw=0.7, color="C0")
         ax.set_ylabel(f"ag{k + 1} [m/s²]")
     axes[0].set_title("Support acceleration")
     axes[-1].set_xlabel("time [s]")
     save(fig, path)
 
 
+RESPONSE = (("u1_m", "at1_m_s2", "u1 [m]", "at1 [m/s²]", "mass centre along x1"),
+            ("u2_m", "at2_m_s2", "u2 [m]", "at2 [m/s²]", "mass centre along x2"),
+            ("theta3_rad", "alphat3_rad_s2", "θ3 [rad]", "θt3'' [rad/s²]", "rotation about x3"))
+
+
 def plot_response(result: Result, k: int, path: Path) -> None:
     """Relative displacement and total acceleration of coordinate k (seed Figs. 6-8)."""
-    labels = [("u1 [m]", "at1 [m/s²]"), ("u2 [m]", "at2 [m/s²]"), ("θ3 [rad]", "θt3'' [rad/s²]")]
-    names = ["mass centre along x1", "mass centre along x2", "rotation about x3"]
-    t = result.time
+    d, at, d_label, at_label, name = RESPONSE[k]
     fig, axes = plt.subplots(2, 1, figsize=(8, 4.5), sharex=True)
-    axes[0].plot(t, result.d[:, k], lw=0.8, color="C0")
-    axes[0].set_ylabel(labels[k][0])
-    axes[0].set_title(f"Relative displacement and total acceleration: {names[k]}")
-    axes[1].plot(t, result.total_acceleration[:, k], lw=0.6, color="C1")
-    axes[1].set_ylabel(labels[k][1])
+    _line(axes[0], result, d, lw=0.8, color="C0")
+    axes[0].set_ylabel(d_label)
+    axes[0].set_title(f"Relative displacement and total acceleration: {name}")
+    _line(axes[1], result, at, lw=0.6, color="C1")
+    axes[1].set_ylabel(at_label)
     axes[1].set_xlabel("time [s]")
+    save(fig, path)
+
+
+def plot_point(result: Result, name: str, path: Path) -> None:
+    """Relative displacement and total acceleration of a point of interest along x1 and x2."""
+    x = dict(result.layout.points)[name] + result.system.body.mass_centre
+    rows = ((f"{name}_u1_m", "u1 [m]", "C0"), (f"{name}_u2_m", "u2 [m]", "C0"),
+            (f"{name}_at1_m_s2", "at1 [m/s²]", "C1"), (f"{name}_at2_m_s2", "at2 [m/s²]", "C1"))
+    fig, axes = plt.subplots(4, 1, figsize=(8, 7), sharex=True)
+    for ax, (column, label, colour) in zip(axes, rows):
+        _line(ax, result, column, lw=0.7, color=colour)
+        ax.set_ylabel(label)
+    axes[0].set_title(f"Relative displacement and total acceleration: point {name} "
+                      f"({x[0]:.4g}, {x[1]:.4g}) m")
+    axes[-1].set_xlabel("time [s]")
     save(fig, path)
 
 
 def plot_element_loops(result: Result, path: Path) -> None:
     """Force against deformation of each distinct element (seed Fig. 4 style)."""
     system = result.system
+    sample = result.plot.sample
     n = len(system.elements)
     cols = min(n, 3)
     rows = math.ceil(n / cols)
@@ -88,7 +141,12 @@ def plot_element_loops(result: Result, path: Path) -> None:
     k = 0
     for i, el in enumerate(system.elements):
         ax = axes.flat[i]
-        ax.plot(result.element_u[:, k] * 1e3, result.element_f[:, k] * 1e-3, lw=0.7)
+        u = sample[:, result.columns.index(f"e{k + 1}_u_m")]
+        f = sample[:, result.columns.index(f"e{k + 1}_f_N")]
+        ax.plot(u * 1e3, f * 1e-3, lw=0.7)
+        if el.stroke is not None:  # the stroke it can take
+            for limit in el.stroke:
+                ax.axvline(limit * 1e3, color="C3", lw=0.9, ls="--")
         label = f"e{k + 1}" if el.count == 1 else f"e{k + 1}-e{k + el.count} (each)"
         ax.set_title(f"{label}: {el.hysteresis}, {el.angle_deg:g}°", fontsize=8)
         ax.set_xlabel("u [mm]")
@@ -101,16 +159,16 @@ def plot_element_loops(result: Result, path: Path) -> None:
 
 def plot_energy(result: Result, path: Path) -> None:
     """Cumulative input, kinetic and hysteretic energy, and the balance error."""
-    t = result.time
-    e_in, e_kin, e_hyst = result.energy.T
     fig, axes = plt.subplots(2, 1, figsize=(8, 4.8), sharex=True, height_ratios=(3, 1))
-    axes[0].plot(t, e_in, label="input", lw=1.0)
-    axes[0].plot(t, e_hyst, label="hysteretic (dissipated + stored)", lw=1.0)
-    axes[0].plot(t, e_kin, label="kinetic", lw=0.7)
+    _line(axes[0], result, "E_input_J", label="input", lw=1.0)
+    _line(axes[0], result, "E_hysteretic_J", label="hysteretic (dissipated + stored)", lw=1.0)
+    if "E_viscous_J" in result.columns:
+        _line(axes[0], result, "E_viscous_J", label="viscous", lw=1.0)
+    _line(axes[0], result, "E_kinetic_J", label="kinetic", lw=0.7)
     axes[0].set_ylabel("energy [J]")
     axes[0].legend(loc="upper left", fontsize=8)
     axes[0].set_title(f"Energy balance (relative error {result.energy_balance:.2e})")
-    axes[1].plot(t, result.energy_error, lw=0.7, color="C3")
+    _line(axes[1], result, "E_error_J", lw=0.7, color="C3")
     axes[1].set_ylabel("error [J]")
     axes[1].set_xlabel("time [s]")
     save(fig, path)
@@ -125,10 +183,17 @@ def write_plots(result: Result, out: Path) -> list[str]:
         written.append(name)
 
     do(plot_body, "model.png")
-    if result.ag is not None:
+    if result.layout.has_support:
         do(plot_excitation, "support_motion.png")
     for k, name in enumerate(("response_x1.png", "response_x2.png", "response_theta3.png")):
         do(plot_response, name, k)
+    for name, _ in result.layout.points:
+        do(plot_point, f"response_{name}.png", name)
     do(plot_element_loops, "element_loops.png")
+    if result.spectra is not None:
+        from .spectra import plot_spectra
+
+        plot_spectra(result.spectra, out / "spectra.png", title=result.system.title)
+        written.append("spectra.png")
     do(plot_energy, "energy.png")
     return written

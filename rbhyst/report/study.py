@@ -72,6 +72,8 @@ def plot_error_vs_dt(study: Study, path: Path) -> None:
         y = [r.err_max for r in ok]
         lo, hi = min(lo, min(y)), max(hi, max(y))
         ax.loglog(x, y, marker=MARKERS[k % len(MARKERS)], ms=5, lw=1.2, color=f"C{k}", label=_label(name, study))
+        est = [r.est_max for r in ok]
+        ax.loglog(x, est, marker=MARKERS[k % len(MARKERS)], ms=9, mfc="none", lw=0, color=f"C{k}", alpha=0.7)
         for r in ok:
             if r.substeps:
                 ax.plot(r.dt, r.err_max, marker="o", ms=10, mfc="none", mec="0.5", lw=0)
@@ -93,6 +95,7 @@ def plot_error_vs_dt(study: Study, path: Path) -> None:
     ax.set_ylabel("error: max over u1, u2, θ3 of max|q − q_ref| / max|q_ref|")
     ax.set_title(f"Error against time step{': ' + study.title if study.title else ''}\n"
                  f"order: slope over the asymptotic range; {_reference_note(study)}", fontsize=8.5)
+    ax.plot([], [], marker="s", ms=9, mfc="none", color="0.4", lw=0, label="each run's own error estimate")
     _substep_legend(ax, study)
     ax.legend(fontsize=7.5, loc="upper left")
     save(fig, path)

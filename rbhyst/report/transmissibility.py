@@ -1,0 +1,52 @@
+"""transmissibility.png: T against frequency, one panel per location, one curve per amplitude."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ._style import plt, save
+
+G_STANDARD = 9.80665
+#: a cross response below this is not drawn (a symmetric body's is rounding: 1e-17)
+SHOWN_ABOVE = 1e-6
+
+
+def plot_transmissibility(result, path: Path, title: str = "") -> None:
+    """log-log T; along the excitation solid, across it dashed; T = 1 marked."""
+    table = result.table()
+    locations = list(dict.fromkeys(c[2:-3] for c in result.columns))
+    amplitudes = list(dict.fromkeys(table[:, 1]))
+    cols = min(len(locations), 2)
+    rows = -(-len(locations) // cols)
+    fig, axes = plt.subplots(rows, cols, figsize=(5.4 * cols, 4.2 * rows), squeeze=False)
+    across = "x2" if result.direction == "x1" else "x1"
+    for ax, loc in zip(axes.flat, locations):
+        for i, amp in enumerate(amplitudes):
+            mine = table[table[:, 1] == amp]
+            f = mine[:, 0]
+            for direction, style in ((result.direction, "-"), (across, "--")):
+                t = mine[:, 2 + result.columns.index(f"T_{loc}_{direction}")].copy()
+                t[t < SHOWN_ABOVE] = np.nan
+                if np.isnan(t).all():
+                    continue
+                label = (f"{amp:.4g} m/s² ({amp / G_STANDARD:.3g} g), "
+                         f"{'along' if direction == result.direction else 'across'} ({direction})")
+                ax.plot(f, t, style, color=f"C{i}", marker="o" if len(f) < 30 else None, ms=3, lw=1.2,
+                        label=label)
+        ax.axhline(1.0, color="0.3", lw=0.9, ls=":", zorder=1)
+        ax.annotate("T = 1", (1.0, 1.0), xycoords=("axes fraction", "data"), ha="right", va="bottom",
+                    fontsize=7, color="0.3")
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_xlabel("frequency [Hz]")
+        ax.set_ylabel("T = peak |at| / amplitude")
+        ax.set_title("G (mass centre)" if loc == "G" else f"point {loc}")
+        ax.grid(True, which="both", alpha=0.25)
+        ax.legend(fontsize=7, loc="best")
+    for ax in axes.flat[len(locations):]:
+        ax.set_visible(False)
+    heading = f"Transmissibility, stepped sine along {result.direction}" + (f": {title}" if title else "")
+    fig.suptitle(heading, fontsize=9)
+    save(fig, path)

@@ -1,0 +1,55 @@
+"""The kernels compiled ahead of time at install run the same code as numba's JIT, to the bit."""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+
+import pytest
+
+from conftest import DECKS
+
+CODE = r"""
+import json, sys
+import os, rbhyst
+from rbhyst.kernels.compiled import ahead_of_time
+if not os.environ.get("RBHYST_JIT") and not ahead_of_time():
+    print(json.dumps(None)); sys.exit()
+res = rbhyst.run(sys.argv[1], integrator=sys.argv[2])
+print(json.dumps({"numba": "numba" in sys.modules, "peaks": res.extremes.peaks(),
+                  "last": res.table[-1].tolist(), "accuracy": res.accuracy["estimated_error"]}))
+"""
+
+
+def installed(env_extra: dict, deck: str, method: str, tmp_path):
+    """Run in a folder outside the source tree, so that the installed package is imported."""
+    env = {**os.environ, **env_extra}
+    out = subprocess.run([sys.executable, "-c", CODE, deck, method], cwd=tmp_path, env=env,
+                         capture_output=True, text=True, check=True)
+    return json.loads(out.stdout.splitlines()[-1])
+
+
+@pytest.mark.parametrize("method", ["chang", "newmark", "adaptive"])
+def test_ahead_of_time_equals_jit_and_loads_no_numba(tmp_path, method):
+    deck = str(DECKS / "machine_on_mounts.toml")
+    aot = installed({}, deck, method, tmp_path)
+    if aot is None:
+        pytest.skip("the installed rbhyst has no kernels built ahead of time (an editable install, or no compiler)")
+    jit = installed({"RBHYST_JIT": "1"}, deck, method, tmp_path)
+    assert aot["numba"] is False  # a run loads no numba at all
+    assert aot["peaks"] == jit["peaks"] and aot["last"] == jit["last"] and aot["accuracy"] == jit["accuracy"]
+
+
+def test_a_stale_build_is_never_used(tmp_path, monkeypatch):
+    """The build is stamped with its sources: once they change, the JIT kernels are used."""
+    from rbhyst.kernels import aot, compiled
+
+    compiled._aot.cache_clear()
+    monkeypatch.setattr(aot, "source_stamp", lambda: -1)
+    try:
+        assert compiled.ahead_of_time() is False
+        assert compiled.kernel("run_chunk").__module__ == "rbhyst.kernels.loop"
+    finally:
+        compiled._aot.cache_clear()

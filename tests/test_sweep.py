@@ -1,0 +1,527 @@
+"""rbhyst sweep: cases built and checked before anything runs, results equal to rbhyst run's,
+statistics by their definition, resumable after Ctrl-C, SIGTERM or a killed worker, output
+folders that hold other files, histories, and the same results on a Dask cluster.
+
+Scenes are the seed's on its synthetic records (decks/records), cut short with
+analysis.duration so that the whole file takes seconds of computing.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+import tomli_w
+import yaml
+from typer.testing import CliRunner
+
+from rbhyst.cli import app
+from rbhyst.deck import ACCEL_UNITS
+from rbhyst.errors import InputError
+from rbhyst.sweep import load_sweep, run_sweep
+from rbhyst.sweep.store import FOLDER, JOURNAL
+from conftest import DECKS, ROOT, records_or_skip
+
+G = ACCEL_UNITS["g"]
+
+
+def invoke(*args):
+    res = CliRunner().invoke(app, [str(a) for a in args])
+    return res.exit_code, res.stderr
+
+
+def snapshot(folder: Path) -> dict[str, tuple[bytes, int]]:
+    return {p.relative_to(folder).as_posix(): (p.read_bytes(), p.stat().st_mtime_ns)
+            for p in sorted(folder.rglob("*")) if p.is_file()}
+
+
+def read_cases(path: Path) -> list[dict[str, str]]:
+    import csv
+
+    with open(path, newline="") as fh:
+        return list(csv.DictReader(fh))
+
+
+@pytest.fixture
+def project(tmp_path):
+    """A user's folder: the seed deck and its records (copies), and notes of theirs."""
+    folder = tmp_path / "study"
+    shutil.copytree(DECKS / "records", folder / "records")
+    shutil.copy(DECKS / "seed_wri.toml", folder / "seed_wri.toml")
+    (folder / "notes.txt").write_text("mine\n")
+    return folder
+
+
+def write_sweep(folder: Path, data: dict, name: str = "sweep", fmt: str = "toml") -> Path:
+    path = folder / f"{name}.{fmt}"
+    path.write_text(tomli_w.dumps(data) if fmt == "toml" else yaml.safe_dump(data, sort_keys=False))
+    return path
+
+
+SYN = {"x1": {"file": "records/synthetic_x1.csv", "units": "g"},
+       "x2": {"file": "records/synthetic_x2.csv", "units": "g"}}
+SWAPPED = {"x1": {"file": "records/synthetic_x2.csv", "units": "g"},
+           "x2": {"file": "records/synthetic_x1.csv", "units": "g"}}
+
+
+def basic(duration: float = 2.0) -> dict:
+    return {"deck": "seed_wri.toml",
+            "motions": [{"name": "syn", **SYN}, {"name": "swapped", **SWAPPED}],
+            "scale": {"factors": [0.5, 1.5]},
+            "vary": {"body.mass": [700.0, 815.773], "analysis.duration": [duration]}}
+
+
+# ---------------------------------------------------------------- results equal rbhyst run's
+
+
+def test_every_case_equals_rbhyst_run_of_its_deck_exactly(project):
+    sweep = write_sweep(project, basic())
+    code, err = invoke("sweep", sweep, "--workers", "2")
+    assert code == 0, err
+    out = project / "results" / "sweep"
+    rows = read_cases(out / "cases.csv")
+    assert [r["case"] for r in rows] == [str(k) for k in range(1, 9)]
+    assert list(rows[0])[:7] == ["case", "motion", "scale", "body.mass", "analysis.duration", "status", "message"]
+    assert [(r["motion"], r["scale"], r["body.mass"]) for r in rows[:4]] == [
+        ("syn", "0.5", "700.0"), ("syn", "0.5", "815.773"), ("syn", "1.5", "700.0"), ("syn", "1.5", "815.773")]
+    motions = {"syn": SYN, "swapped": SWAPPED}
+    for r in rows:
+        assert r["status"] == "ok"
+        data = _toml(project / "seed_wri.toml")
+        data["body"]["mass"] = float(r["body.mass"])
+        data["analysis"]["duration"] = 2.0
+        data["excitation"]["support"] = {c: {**s, "scale": float(r["scale"])} for c, s in motions[r["motion"]].items()}
+        path = project / "equivalent.toml"
+        path.write_text(tomli_w.dumps(data))
+        code, err = invoke("run", path, "--no-plots", "--out", project / "one")
+        assert code == 0, err
+        summary = json.loads((project / "one" / "summary.json").read_text())
+        peaks = {k[len("peak_"):]: float(v) for k, v in r.items() if k.startswith("peak_")}
+        assert peaks == summary["peaks"]  # every peak, exactly (cases.csv holds the shortest exact repr)
+        assert r["message"] == "; ".join(summary["warnings"])  # a case's warnings are its message
+        assert float(r["energy_balance_error"]) == summary["energy"]["balance_error"]
+        assert float(r["energy_input_J"]) == summary["energy"]["input_J"]
+
+
+def _toml(path: Path) -> dict:
+    import tomllib
+
+    return tomllib.loads(path.read_text())
+
+
+def test_a_worker_gives_what_rbhyst_run_gives(project):
+    import rbhyst
+    from rbhyst.sweep.worker import flat_numbers, run_case, without_timings
+
+    deck = rbhyst.load_deck(project / "seed_wri.toml")
+    late = {"x1": {"type": "sine", "amplitude": 0.1, "frequency_hz": 2.0, "units": "g", "start": 3.0}}
+    values = {"analysis.duration": 2.0, "excitation.support": late}  # a warning too
+    summary = rbhyst.run(deck.with_values(values)).summary()
+    assert summary["warnings"]
+    for histories in (False, True):
+        got = run_case(deck, "k", values, histories)
+        assert got["status"] == "ok" and got["peaks"] == summary["peaks"]
+        assert got["energy"] == {k: v for k, v in summary["energy"].items() if k != "warn_above"}
+        assert got["message"] == "; ".join(summary["warnings"])
+        assert got["accuracy"] == without_timings(flat_numbers(summary.get("accuracy") or {}))
+        assert ("history" in got) == histories
+
+
+def test_stats_by_their_definition(project):
+    data = basic()
+    data["motions"].append({"name": "sine", "x1": {"type": "sine", "amplitude": 0.2, "frequency_hz": 2.0,
+                                                   "units": "g"}})
+    sweep = write_sweep(project, data)
+    assert invoke("sweep", sweep, "--workers", "2", "--no-plots")[0] == 0
+    out = project / "results" / "sweep"
+    rows = read_cases(out / "cases.csv")
+    stats = read_cases(out / "stats.csv")
+    assert list(stats[0]) == ["scale", "body.mass", "analysis.duration", "peak", "count", "failed",
+                              "mean", "median", "p84", "max"]
+    peaks = [k for k in rows[0] if k.startswith("peak_")]
+    assert len(stats) == 4 * len(peaks)  # 2 levels x 2 masses, every peak
+    for s in stats:
+        x = sorted(float(r[s["peak"]]) for r in rows if r["scale"] == s["scale"] and r["body.mass"] == s["body.mass"])
+        assert int(s["count"]) == len(x) == 3 and s["failed"] == "0"
+        assert float(s["max"]) == x[2]
+        assert float(s["median"]) == x[1]
+        # 84th percentile, linear between order statistics: position 0.84 (n - 1) = 1.68
+        assert float(s["p84"]) == pytest.approx(x[1] + 0.68 * (x[2] - x[1]), rel=1e-15, abs=0)
+        assert float(s["mean"]) == pytest.approx((x[0] + x[1] + x[2]) / 3, rel=1e-15, abs=0)
+    # the sine has no x2: its ag2 peak is 0, not missing
+    assert {r["peak_ag2_m_s2"] for r in rows if r["motion"] == "sine"} == {"0.0"}
+
+
+def test_pga_targets_scale_each_pair_to_its_larger_component(project):
+    data = {"deck": "seed_wri.toml", "motions": [{"name": "syn", **SYN}, {"name": "swapped", **SWAPPED}],
+            "scale": {"pga_g": [0.1, 0.3]}}
+    sweep = write_sweep(project, data)
+    assert invoke("sweep", sweep, "--workers", "2", "--no-plots")[0] == 0
+    rows = read_cases(project / "results" / "sweep" / "cases.csv")
+    assert [r["scale"] for r in rows] == ["0.1", "0.3", "0.1", "0.3"]
+    for r in rows:  # the records' samples fall on the grid: the larger peak is the target
+        peak = max(float(r["peak_ag1_m_s2"]), float(r["peak_ag2_m_s2"]))
+        assert peak == pytest.approx(float(r["scale"]) * G, rel=1e-14)
+        ratio = float(r["peak_ag2_m_s2"]) / float(r["peak_ag1_m_s2"])
+        assert ratio == pytest.approx(0.25 / 0.35 if r["motion"] == "syn" else 0.35 / 0.25, rel=1e-6)
+
+
+def test_el_centro_pair_from_a_folder_by_pattern(tmp_path):
+    records = records_or_skip()
+    data = {"deck": str(DECKS / "seed_wri.toml"),
+            "motion_folders": [{"folder": str(records), "x1": "*270.AT2", "x2": "*180.AT2", "units": "g"}],
+            "scale": {"pga_g": [0.4]}}  # the whole records: both peaks are in
+    sw = load_sweep(write_sweep(tmp_path, data))
+    assert sw.motions == ["I-ELC"]
+    outcome = run_sweep(sw, out=tmp_path / "out", workers=1, plots=False)
+    (row,) = read_cases(tmp_path / "out" / "cases.csv")
+    assert row["status"] == "ok", row["message"]
+    # the 180 component is the larger (0.3129 g against 0.2148 g): it is scaled to 0.4 g
+    assert float(row["peak_ag2_m_s2"]) == pytest.approx(0.4 * G, rel=1e-12)
+    assert float(row["peak_ag1_m_s2"]) / float(row["peak_ag2_m_s2"]) == pytest.approx(0.2148 / 0.3129, rel=2e-3)
+    assert outcome.computed == 1
+
+
+# ---------------------------------------------------------------- the sweep file and its mistakes
+
+
+def test_motion_folders_pair_components_by_the_star(project):
+    rec = project / "suite"
+    rec.mkdir()
+    for name in ("a", "b"):
+        for c in ("x1", "x2"):
+            shutil.copy(project / "records" / f"synthetic_{c}.csv", rec / f"{name}_{c}.csv")
+    (rec / "readme.txt").write_text("not a record\n")
+    data = {"deck": "seed_wri.toml", "motion_folders": [{"folder": "suite", "x1": "*_x1.csv", "x2": "*_x2.csv",
+                                                         "units": "g"}],
+            "vary": {"analysis.duration": [0.5]}}
+    sw = load_sweep(write_sweep(project, data))
+    assert sw.motions == ["a", "b"]
+    assert sw.cases[0].values["excitation.support"] == {
+        "x1": {"file": str((rec / "a_x1.csv").resolve()), "units": "g", "scale": 1.0},
+        "x2": {"file": str((rec / "a_x2.csv").resolve()), "units": "g", "scale": 1.0}}
+    # same contents, same key: a and b are one computation
+    assert sw.cases[0].key == sw.cases[1].key
+    (rec / "b_x2.csv").unlink()
+    with pytest.raises(InputError) as err:
+        load_sweep(write_sweep(project, data))
+    assert err.value.problems == [f"motion_folders[1]: b_x1.csv matches x1 = '*_x1.csv' but b_x2.csv (x2) "
+                                  f"is not in {project / 'suite'}"]
+
+
+def test_listed_cases_and_yaml(project):
+    data = {"deck": "seed_wri.toml", "motions": [{"name": "syn", **SYN}, {"name": "swapped", **SWAPPED}],
+            "scale": {"factors": [1.0]},
+            "cases": [{"values": {"body": {"mass": 700.0}, "analysis.duration": 0.5}},
+                      {"motion": "swapped", "scale": 2.0, "values": {"analysis.duration": 0.5}}]}
+    sw = load_sweep(write_sweep(project, data, fmt="yaml"))
+    assert sw.vary_keys == ["body.mass", "analysis.duration"]
+    assert [(c.motion, c.scale, c.vary) for c in sw.cases] == [
+        ("syn", 1.0, {"body.mass": 700.0, "analysis.duration": 0.5}),
+        ("swapped", 1.0, {"body.mass": 700.0, "analysis.duration": 0.5}),
+        ("swapped", 2.0, {"analysis.duration": 0.5})]
+    assert sw.cases[2].values["excitation.support"]["x1"]["scale"] == 2.0
+
+
+@pytest.mark.parametrize("change, lines", [
+    ({"motions": [{"name": "syn", **SYN, "x3": {}}]}, ["motions[1].x3: unknown key"]),
+    ({"motions": [{"name": "syn", **SYN}, {"name": "syn", "x1": {"file": "records/synthetic_x1.csv",
+                                                                  "units": "gee"}}]},
+     ["motions[2].x1.units: Input should be 'g', 'm/s2' or 'cm/s2'"]),
+    ({"motions": [{"name": "syn", **SYN}, {"name": "syn", **SWAPPED}]},
+     ["motions[2]: the motion name 'syn' is taken by motions[1]"]),
+    ({"motions": [{"name": "syn", "x1": {"file": "records/nope.csv", "units": "g"}}]},
+     ["motions[1].x1.file: {folder}/records/nope.csv: no such file"]),
+    ({"scale": {"factors": [1.0], "pga_g": [0.3]}}, ["scale: give exactly one of `factors` or `pga_g`"]),
+    ({"vary": {"body.mass": [700.0, 700.0]}}, ["vary: 'body.mass': the value 700.0 is repeated"]),
+    ({"colour": "red"}, ["colour: unknown key"]),
+    ({"vary": {"hysteresis.wri_sheer.loading.kb": [2e5, 2.2e5]}},
+     ["case 1 (motion syn, scale 1, hysteresis.wri_sheer.loading.kb = 200000.0): hysteresis.wri_sheer.loading.kb: "
+      "no hysteresis.wri_sheer in the deck (every case)"]),
+    ({"vary": {"body.masss": [700.0]}}, ["case 1 (motion syn, scale 1, body.masss = 700.0): body.masss: unknown key"]),
+    ({"vary": {"body.mass": [700.0, -1.0, "heavy"]}},
+     ["case 2 (motion syn, scale 1, body.mass = -1.0): body.mass: Input should be greater than 0",
+      "case 3 (motion syn, scale 1, body.mass = heavy): body.mass: Input should be a valid number"]),
+    ({"vary": {"analysis.dt": [0.001, 5.0]}, "motions": [{"name": "syn", **SYN}, {"name": "b", **SWAPPED}]},
+     ["case 2 (motion syn, scale 1, analysis.dt = 5.0, analysis.duration = 2.0): analysis.dt: 5.0 s is larger than analysis.duration = "
+      "2.0 s (and 1 more case)"]),
+])
+def test_mistakes_are_one_line_each_and_nothing_is_written(project, change, lines):
+    data = {"deck": "seed_wri.toml", "motions": [{"name": "syn", **SYN}],
+            "vary": {"analysis.duration": [2.0]}, **change}
+    if "vary" in change and "analysis.duration" not in change["vary"]:
+        data["vary"] = {**change["vary"], "analysis.duration": [2.0]} if "analysis.dt" in change["vary"] \
+            else change["vary"]
+    sweep = write_sweep(project, data)
+    before = snapshot(project)
+    code, err = invoke("sweep", sweep)
+    assert code == 2
+    assert err.splitlines() == [f"error: {x.format(folder=project)}" for x in lines]
+    assert snapshot(project) == before and not (project / "results").exists()
+
+
+def test_a_key_changes_with_what_the_result_depends_on(project):
+    sw = load_sweep(write_sweep(project, basic()))
+    keys = [c.key for c in sw.cases]
+    assert len(set(keys)) == len(keys)
+    again = load_sweep(write_sweep(project, {**basic(), "vary": {"analysis.duration": [2.0],
+                                                                 "body.mass": [815.773, 700.0]}}, name="again"))
+    assert {c.key for c in again.cases} == set(keys)  # order and key order do not matter
+    moved = project.parent / "moved"
+    shutil.copytree(project, moved)
+    assert [c.key for c in load_sweep(moved / "sweep.toml").cases] == keys  # nor where the files are
+    with open(moved / "records" / "synthetic_x2.csv", "a") as fh:
+        fh.write("40.01,0.0\n")
+    changed = [c.key for c in load_sweep(moved / "sweep.toml").cases]
+    assert all(a != b for a, b in zip(keys, changed))  # every motion reads synthetic_x2
+    deck = (moved / "seed_wri.toml").read_text().replace("title = ", "title = 'other' #")
+    (moved / "seed_wri.toml").write_text(deck)
+    assert [c.key for c in load_sweep(moved / "sweep.toml").cases] == changed  # the title changes no number
+
+
+# ---------------------------------------------------------------- failures, resuming, interrupts
+
+
+def test_failed_cases_are_recorded_and_do_not_stop_the_others(project):
+    (project / "records" / "broken.csv").write_text("time_s,acc_g\n0.0,0.1\n0.01,oops\n")
+    data = {"deck": "seed_wri.toml",
+            "motions": [{"name": "syn", **SYN}, {"name": "broken", "x1": {"file": "records/broken.csv", "units": "g"}}],
+            "vary": {"analysis.duration": [1.0], "analysis.dt": [0.001, 0.002], "analysis.max_substep_level": [0]}}
+    sweep = write_sweep(project, data)
+    code, err = invoke("sweep", sweep, "--workers", "2", "--no-plots")
+    assert code == 0, err
+    rows = read_cases(project / "results" / "sweep" / "cases.csv")
+    assert [r["status"] for r in rows] == ["ok", "failed", "failed", "failed"]
+    assert rows[1]["message"].startswith("t = ") and "1 substeps of dt = 0.002 s cannot resolve" in rows[1]["message"]
+    assert rows[2]["message"] == f"excitation.support.x1: {project / 'records' / 'broken.csv'}:3: 'oops' is not a number"
+    assert rows[1]["peak_u1_m"] == "" and float(rows[0]["peak_u1_m"]) > 0
+    assert "1 ok, 3 failed" in err and "warning: case 2 (syn, scale 1.0) failed: t = " in err
+    stats = read_cases(project / "results" / "sweep" / "stats.csv")
+    assert {(s["analysis.dt"], s["count"], s["failed"]) for s in stats} == {("0.001", "1", "1"), ("0.002", "0", "2")}
+    # a finished sweep is not computed again, failures included
+    code, err = invoke("sweep", sweep, "--no-plots")
+    assert code == 0 and "computed 0, 4 already in the folder" in err and "nothing to compute" in err
+
+
+def test_resume_computes_only_what_is_missing_and_fresh_starts_over(project):
+    sweep = write_sweep(project, basic(duration=1.0))
+    sw = load_sweep(sweep)
+    first = run_sweep(sw, workers=2, plots=False)
+    assert (first.computed, first.reused) == (8, 0)
+    before = (project / "results" / "sweep" / "cases.csv").read_bytes()
+    assert run_sweep(load_sweep(sweep), workers=2, plots=False).computed == 0
+    assert (project / "results" / "sweep" / "cases.csv").read_bytes() == before
+    data = basic(duration=1.0)
+    data["scale"]["factors"].append(1.0)  # one more level: only its cases run
+    more = run_sweep(load_sweep(write_sweep(project, data)), workers=2, plots=False)
+    assert (more.computed, more.reused) == (4, 8)
+    fresh = run_sweep(load_sweep(write_sweep(project, data)), workers=2, plots=False, fresh=True)
+    assert (fresh.computed, fresh.reused) == (12, 0)
+    rows = read_cases(project / "results" / "sweep" / "cases.csv")
+    old = {(r["motion"], r["scale"], r["body.mass"]): r for r in
+           read_cases_from_bytes(before)}
+    for r in rows:  # recomputed: the same bits
+        if (r["motion"], r["scale"], r["body.mass"]) in old:
+            o = old[(r["motion"], r["scale"], r["body.mass"])]
+            assert {k: v for k, v in r.items() if k != "case"} == {k: v for k, v in o.items() if k != "case"}
+
+
+def read_cases_from_bytes(data: bytes) -> list[dict[str, str]]:
+    import csv
+    import io
+
+    return list(csv.DictReader(io.StringIO(data.decode())))
+
+
+def journal_cases(out: Path) -> int:
+    path = out / FOLDER / JOURNAL
+    return max(0, len(path.read_bytes().splitlines()) - 1) if path.exists() else 0
+
+
+def long_sweep(project: Path, n: int = 40) -> Path:
+    """n cases of the seed's full 40 s: long enough to be interrupted."""
+    return write_sweep(project, {"deck": "seed_wri.toml",
+                                 "vary": {"body.mass": [800.0 + k for k in range(n)]}})
+
+
+def start(sweep: Path, *args, session: bool = False) -> subprocess.Popen:
+    return subprocess.Popen([sys.executable, "-m", "rbhyst", "sweep", sweep.name, "--workers", "2", "--no-plots",
+                             *args], cwd=sweep.parent, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            start_new_session=session)
+
+
+def wait_for(proc, out: Path, cases: int) -> None:
+    deadline = time.monotonic() + 120
+    while journal_cases(out) < cases:
+        assert proc.poll() is None, proc.communicate()
+        assert time.monotonic() < deadline
+        time.sleep(0.01)
+
+
+def workers_of(proc) -> list:
+    import psutil
+
+    return [p for p in psutil.Process(proc.pid).children(recursive=True) if "python" in p.name().lower()]
+
+
+def test_sigterm_keeps_what_finished_and_the_same_command_resumes(project):
+    import psutil
+
+    sweep = long_sweep(project)
+    out = project / "results" / "sweep"
+    proc = start(sweep)
+    try:
+        wait_for(proc, out, 3)
+        workers = workers_of(proc)
+        proc.send_signal(signal.SIGTERM)
+        _, err = proc.communicate(timeout=60)
+    finally:
+        proc.kill()
+    assert proc.returncode == 143, err
+    assert err.splitlines()[-1] == (f"interrupted: the finished cases are kept in {Path('results/sweep') / FOLDER}; "
+                                    "the same command computes the rest")
+    _, alive = psutil.wait_procs(workers, timeout=10)
+    assert not alive  # no worker outlives the sweep
+    kept = journal_cases(out)
+    assert 3 <= kept < 40
+    assert not (out / "cases.csv").exists()
+    proc = start(sweep)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 0, err
+    assert f"computed {40 - kept} on 2 local workers, {kept} already in the folder" in err
+    rows = read_cases(out / "cases.csv")
+    assert len(rows) == 40 and {r["status"] for r in rows} == {"ok"}
+
+
+def test_ctrl_c_reaches_the_workers_too_and_only_the_sweep_answers(project):
+    import psutil
+
+    sweep = long_sweep(project)
+    out = project / "results" / "sweep"
+    proc = start(sweep, session=True)
+    try:
+        wait_for(proc, out, 3)
+        workers = workers_of(proc)
+        os.killpg(proc.pid, signal.SIGINT)  # as the terminal does: the whole process group
+        _, err = proc.communicate(timeout=60)
+    finally:
+        proc.kill()
+    assert proc.returncode == 130, err
+    # a cold numba cache adds a compile note first; nothing else may be said (no worker's traceback)
+    said = [line for line in err.splitlines() if not line.startswith("note: compiling")]
+    assert said[1:] == [f"interrupted: the finished cases are kept in {Path('results/sweep') / FOLDER}; "
+                        "the same command computes the rest"], err
+    _, alive = psutil.wait_procs(workers, timeout=10)
+    assert not alive
+    assert 3 <= journal_cases(out) < 40
+
+
+def test_a_killed_worker_costs_only_its_batch(project):
+    import rbhyst
+
+    sweep = long_sweep(project)
+    out = project / "results" / "sweep"
+    proc = start(sweep)
+    try:
+        wait_for(proc, out, 2)
+        workers_of(proc)[-1].kill()
+        _, err = proc.communicate(timeout=120)
+    finally:
+        proc.kill()
+    assert proc.returncode == 0, err
+    rows = read_cases(out / "cases.csv")
+    assert len(rows) == 40 and {r["status"] for r in rows} == {"ok"}
+    sw = load_sweep(sweep)
+    for k in (0, 20, 39):  # the same bits as a run that lost nothing
+        peaks = rbhyst.run(sw.base.deck().with_values(sw.cases[k].values)).summary()["peaks"]
+        assert {c[len("peak_"):]: float(v) for c, v in rows[k].items() if c.startswith("peak_")} == peaks
+
+
+# ---------------------------------------------------------------- the output folder
+
+
+def test_the_folder_may_hold_the_sweep_and_other_files(project):
+    sweep = write_sweep(project, basic(duration=0.5))
+    (project / "cases.csv").write_text("my own table\n")
+    before = snapshot(project)
+    code, err = invoke("sweep", sweep, "--out", project, "--workers", "1")
+    assert code == 2
+    assert err.splitlines() == [f"error: {project}: cases.csv exists and rbhyst did not write it (not listed in .rbhyst.json); "
+                                "rbhyst will not overwrite it: move it away or choose another output folder"]
+    assert snapshot(project) == before
+    (project / "cases.csv").unlink()
+    before = snapshot(project)
+    os.chdir(project)
+    try:
+        code, err = invoke("sweep", sweep.name, "--out", ".", "--workers", "1")
+        assert code == 0, err
+        assert {k: v for k, v in snapshot(project).items() if k in before} == before
+        ours = {"cases.csv", "stats.csv", "sweep.json", "ida.png", "vary.png", ".rbhyst.json", f"{FOLDER}/{JOURNAL}"}
+        assert set(snapshot(project)) - set(before) == ours
+        # a second sweep into the same folder: replaces its own files, keeps the user's
+        code, err = invoke("sweep", sweep.name, "--out", ".", "--fresh", "--no-plots", "--workers", "1")
+        assert code == 0, err
+        assert set(snapshot(project)) - set(before) == ours - {"ida.png", "vary.png"}
+        assert {k: v for k, v in snapshot(project).items() if k in before} == before
+    finally:
+        os.chdir(ROOT)
+
+
+def test_a_foreign_journal_folder_is_refused(project):
+    sweep = write_sweep(project, basic(duration=0.5))
+    out = project / "out"
+    (out / FOLDER).mkdir(parents=True)
+    (out / FOLDER / "mine.txt").write_text("mine\n")
+    before = snapshot(project)
+    code, err = invoke("sweep", sweep, "--out", out)
+    assert code == 2
+    assert err.splitlines() == [f"error: {out}: {FOLDER} exists and rbhyst did not make it (no {JOURNAL} of "
+                                "rbhyst's in it); move it away or choose another output folder"]
+    assert snapshot(project) == before
+
+
+# ---------------------------------------------------------------- histories and Dask
+
+
+def test_histories_are_the_runs_rows(project):
+    pq = pytest.importorskip("pyarrow.parquet")
+    import rbhyst
+
+    sweep = write_sweep(project, basic(duration=0.5))
+    code, err = invoke("sweep", sweep, "--save-histories", "--no-plots", "--workers", "2")
+    assert code == 0, err
+    out = project / "results" / "sweep"
+    table = pq.read_table(out / "histories.parquet")
+    assert table.column_names[0] == "case" and table.num_rows == 8 * 501
+    sw = load_sweep(sweep)
+    for case in (sw.cases[0], sw.cases[5]):
+        res = rbhyst.run(sw.base.deck().with_values(case.values))
+        rows = table.filter(table.column("case").to_numpy() == case.number)
+        got = np.column_stack([rows.column(c).to_numpy() for c in res.columns])
+        assert rows.column_names[1:] == list(res.columns)
+        assert np.array_equal(got, res.table)  # the same bits
+    # a later run without --save-histories keeps them in the journal; one with it reuses them
+    code, err = invoke("sweep", sweep, "--save-histories", "--no-plots")
+    assert code == 0 and "computed 0, 8 already" in err
+
+
+def test_dask_cluster_gives_the_local_results(project):
+    distributed = pytest.importorskip("distributed")
+    sweep = write_sweep(project, basic(duration=1.0))
+    assert invoke("sweep", sweep, "--no-plots", "--workers", "2", "--out", project / "local")[0] == 0
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) \
+            as cluster:
+        code, err = invoke("sweep", sweep, "--no-plots", "--scheduler", cluster.scheduler_address,
+                           "--out", project / "dask")
+    assert code == 0, err
+    assert f"computed 8 on {cluster.scheduler_address} (2 worker threads)" in err
+    assert (project / "dask" / "cases.csv").read_bytes() == (project / "local" / "cases.csv").read_bytes()
+    assert (project / "dask" / "stats.csv").read_bytes() == (project / "local" / "stats.csv").read_bytes()
