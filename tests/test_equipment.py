@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import copy
 import math
 
 import numpy as np
@@ -10,7 +9,6 @@ import pytest
 from scipy.optimize import brentq
 
 import rbhyst
-from rbhyst.integrators import names as integrator_names
 from conftest import linear_set, seed_deck, square_linear_deck, write_deck
 
 K, MASS = 2.0e5, 500.0  # square_linear_deck: the x1 mode has 2K, omega^2 = 2K/M

@@ -170,7 +170,7 @@ def test_reference_converges_with_its_tolerance(hysteretic):
 
 def test_reference_fills_every_column_on_the_settings_grid(hysteretic):
     system, (res, _) = hysteretic
-    names, table = res.columns, res.table
+    table = res.table
     assert np.all(np.isfinite(table))
     assert np.allclose(res.time, 1e-4 * np.arange(20001), rtol=0, atol=1e-12)
     assert res.element_u.shape == (20001, system.n_output_elements)

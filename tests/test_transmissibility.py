@@ -96,17 +96,12 @@ def test_the_decks_integrator_is_second_order_at_100_steps_a_period():
 
 def test_viscous_damping_closed_form():
     """T = sqrt(1 + (2 zeta r)^2) / sqrt((1 - r^2)^2 + (2 zeta r)^2) with linear viscous
-    dampers ([[dampers]]); runs once the deck has them."""
+    dampers ([[dampers]])."""
     zeta = 0.1
     c = zeta * 2 * MASS * W0 / 2  # two dampers along x1: 2 c = 2 zeta m omega0
     d = linear_square()
     d["dampers"] = [{"point": [0.0, 0.5], "angle_deg": 0.0, "c": c}, {"point": [0.0, -0.5], "angle_deg": 0.0, "c": c}]
-    try:
-        deck = parse_deck(d)
-    except InputError as err:
-        if any(p.startswith("dampers") for p in err.problems):
-            pytest.skip("viscous dampers are not in this version of the deck")
-        raise
+    deck = parse_deck(d)
     res = stepped_sine(deck, "x1", [1.0], [r * F0 for r in (0.5, 1.0, 2.0, 3.0)])
     for row in res.table():
         r = row[0] / F0
