@@ -86,10 +86,12 @@ class Layout:
     def index(self, name: str) -> int:
         return self.names.index(name)
 
-    def table(self, raw: Raw) -> np.ndarray:
-        """Rows of the table for a chunk (every computed step of it)."""
+    def table(self, raw: Raw, out: np.ndarray | None = None) -> np.ndarray:
+        """Rows of the table for a chunk (every computed step of it), into ``out`` if given
+        (n rows; column-major is fastest)."""
         n = len(raw.t)
-        out = np.empty((len(self.names), n)).T  # column by column: each written contiguously
+        if out is None:
+            out = np.empty((len(self.names), n)).T  # column by column: each written contiguously
         out[:, 0] = raw.t
         out[:, 1:4] = raw.d - self.origin
         out[:, 4:7] = raw.v

@@ -53,7 +53,10 @@ class Rows:
         self.every = every
         self.extremes = Extremes(layout.names)
         self.plot = PlotData(n_steps + 1, len(layout.names))
-        self._kept: list[np.ndarray] | None = [] if keep else None
+        # the kept rows, allocated once and column by column (as Layout.table writes them): no
+        # chunk is copied twice, and a column (Result.column, to_pandas) is contiguous
+        n_rows = n_steps // every + 1
+        self._kept = np.empty((len(layout.names), n_rows)).T if keep else None
         self._csv = CsvWriter(csv_path, layout.names) if csv_path is not None else None
         self._next = 0  # global index of the next row
         # displacements at up to COMPARE_POINTS steps, for the error estimate (rbhyst.accuracy)
@@ -68,7 +71,9 @@ class Rows:
             self.spectra = SpectraSink([label for label, _ in located], *spectra, dt=dt)
 
     def add(self, raw: Raw) -> None:
-        table = self.layout.table(raw)
+        n = len(raw.t)
+        direct = self._kept is not None and self.every == 1
+        table = self.layout.table(raw, out=self._kept[self._next:self._next + n] if direct else None)
         self.plot.update(table, self.extremes)
         if self.spectra is not None:  # every step of dt, whatever output.every writes
             self.spectra.update(table[:, self._spectrum_columns])
@@ -78,8 +83,9 @@ class Rows:
         self._q.append(q)
         first = (-self._next) % self.every
         written = table[first::self.every]
-        if self._kept is not None:
-            self._kept.append(written if self.every == 1 else written.copy())  # not a view of every step
+        if self._kept is not None and not direct:
+            row = -(-self._next // self.every)  # the first kept row of this chunk
+            self._kept[row:row + len(written)] = written
         if self._csv is not None:
             self._csv.add(written)
         self._next += len(table)
@@ -98,7 +104,7 @@ class Rows:
             self._csv.close()
         if self._kept is None:
             return None
-        return np.vstack(self._kept) if self._kept else np.empty((0, len(self.layout.names)))
+        return self._kept[:-(-self._next // self.every)]  # every row, unless the run stopped early
 
 
 def simulate(system: System, s: Settings, keep: bool = True, csv_path=None) -> Result:
