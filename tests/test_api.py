@@ -99,3 +99,14 @@ def test_pandas_and_matplotlib_are_imported_only_when_used():
             "assert 'pandas' not in sys.modules and 'matplotlib' not in sys.modules; "
             "r.to_pandas(); assert 'pandas' in sys.modules")
     subprocess.run([sys.executable, "-c", code, str(DECKS / "machine_on_mounts.toml")], check=True)
+
+
+def test_writing_plots_leaves_the_callers_matplotlib_as_it_was(tmp_path):
+    """A notebook that draws its own figures keeps its settings and its figure list."""
+    code = ("import sys, matplotlib; matplotlib.use('Agg'); import matplotlib.pyplot as plt, rbhyst; "
+            "before = dict(matplotlib.rcParams); fig = plt.figure(); "
+            "rbhyst.run(sys.argv[1]).write(sys.argv[2], plots=True); "
+            "assert dict(matplotlib.rcParams) == before; assert plt.get_fignums() == [fig.number]")
+    subprocess.run([sys.executable, "-c", code, str(DECKS / "machine_on_mounts.toml"), str(tmp_path / "out")],
+                   check=True)
+    assert (tmp_path / "out" / "model.png").exists()

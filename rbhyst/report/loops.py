@@ -9,7 +9,7 @@ import numpy as np
 
 from ..calibration import LoopResult
 from ..hysteresis import limiting_curve
-from ._style import plt, save
+from ._style import save, styled, subplots
 
 
 def _display_units(u_max: float, f_max: float) -> tuple[str, float, str, float]:
@@ -19,6 +19,7 @@ def _display_units(u_max: float, f_max: float) -> tuple[str, float, str, float]:
     return u_unit, u_fac, f_unit, f_fac
 
 
+@styled
 def plot_loops(results: list[LoopResult], path: Path, title: str | None = None,
                initial: dict[str, np.ndarray] | None = None) -> None:
     """Model loops (and measured ones when present) with the limiting curves c+ and c-.
@@ -29,7 +30,7 @@ def plot_loops(results: list[LoopResult], path: Path, title: str | None = None,
     n = len(results)
     cols = 1 if n == 1 else 2
     rows = math.ceil(n / cols)
-    fig, axes = plt.subplots(rows, cols, figsize=(4.6 * cols, 3.9 * rows), squeeze=False)
+    fig, axes = subplots(rows, cols, figsize=(4.6 * cols, 3.9 * rows), squeeze=False)
     for k, (ax, res) in enumerate(zip(axes.flat, results)):
         f_all = res.f if res.f_data is None else np.concatenate([res.f, res.f_data])
         u_unit, u_fac, f_unit, f_fac = _display_units(float(np.max(np.abs(res.u))), float(np.max(np.abs(f_all))))

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 
 from ..results import Result
-from ._style import plt, save
+from ._style import TIME_MARGINS, save, styled, subplots
 
 
 def _draw_outline(ax, v: np.ndarray, fill_alpha: float, labels: list[str]) -> None:
@@ -19,12 +19,13 @@ def _draw_outline(ax, v: np.ndarray, fill_alpha: float, labels: list[str]) -> No
         ax.annotate(label, (x, y), textcoords="offset points", xytext=(4, 4), fontsize=8, color="0.3")
 
 
+@styled
 def plot_body(result: Result, path: Path) -> None:
     """The body (every part, the denser darker, with its mass), its mass centre G and its
     elements (seed Fig. 3a)."""
     system = result.system
     body = system.body
-    fig, ax = plt.subplots(figsize=(5.5, 5.5))
+    fig, ax = subplots(figsize=(5.5, 5.5))
     if body.form == "parts":
         # overlapping fills add up: a dense unit inside a shell shows darker
         density = [p.mass / p.area for p in body.parts]
@@ -86,15 +87,16 @@ def _line(ax, result: Result, name: str, **kw) -> None:
     ax.plot(t, y, **kw)
 
 
+@styled
 def plot_excitation(result: Result, path: Path) -> None:
     """Support acceleration along x1 and x2 (seed Fig. 5)."""
-    fig, axes = plt.subplots(2, 1, figsize=(8, 4.5), sharex=True)
+    fig, axes = subplots(2, 1, figsize=(8, 4.5), sharex=True)
     for k, ax in enumerate(axes):
         _line(ax, result, f"ag{k + 1}_m_s2", lw=0.7, color="C0")
         ax.set_ylabel(f"ag{k + 1} [m/s²]")
     axes[0].set_title("Support acceleration")
     axes[-1].set_xlabel("time [s]")
-    save(fig, path)
+    save(fig, path, TIME_MARGINS)
 
 
 RESPONSE = (("u1_m", "at1_m_s2", "u1 [m]", "at1 [m/s²]", "mass centre along x1"),
@@ -102,34 +104,37 @@ RESPONSE = (("u1_m", "at1_m_s2", "u1 [m]", "at1 [m/s²]", "mass centre along x1"
             ("theta3_rad", "alphat3_rad_s2", "θ3 [rad]", "θt3'' [rad/s²]", "rotation about x3"))
 
 
+@styled
 def plot_response(result: Result, k: int, path: Path) -> None:
     """Relative displacement and total acceleration of coordinate k (seed Figs. 6-8)."""
     d, at, d_label, at_label, name = RESPONSE[k]
-    fig, axes = plt.subplots(2, 1, figsize=(8, 4.5), sharex=True)
+    fig, axes = subplots(2, 1, figsize=(8, 4.5), sharex=True)
     _line(axes[0], result, d, lw=0.8, color="C0")
     axes[0].set_ylabel(d_label)
     axes[0].set_title(f"Relative displacement and total acceleration: {name}")
     _line(axes[1], result, at, lw=0.6, color="C1")
     axes[1].set_ylabel(at_label)
     axes[1].set_xlabel("time [s]")
-    save(fig, path)
+    save(fig, path, TIME_MARGINS)
 
 
+@styled
 def plot_point(result: Result, name: str, path: Path) -> None:
     """Relative displacement and total acceleration of a point of interest along x1 and x2."""
     x = dict(result.layout.points)[name] + result.system.body.mass_centre
     rows = ((f"{name}_u1_m", "u1 [m]", "C0"), (f"{name}_u2_m", "u2 [m]", "C0"),
             (f"{name}_at1_m_s2", "at1 [m/s²]", "C1"), (f"{name}_at2_m_s2", "at2 [m/s²]", "C1"))
-    fig, axes = plt.subplots(4, 1, figsize=(8, 7), sharex=True)
+    fig, axes = subplots(4, 1, figsize=(8, 7), sharex=True)
     for ax, (column, label, colour) in zip(axes, rows):
         _line(ax, result, column, lw=0.7, color=colour)
         ax.set_ylabel(label)
     axes[0].set_title(f"Relative displacement and total acceleration: point {name} "
                       f"({x[0]:.4g}, {x[1]:.4g}) m")
     axes[-1].set_xlabel("time [s]")
-    save(fig, path)
+    save(fig, path, TIME_MARGINS)
 
 
+@styled
 def plot_element_loops(result: Result, path: Path) -> None:
     """Force against deformation of each distinct element (seed Fig. 4 style)."""
     system = result.system
@@ -137,7 +142,7 @@ def plot_element_loops(result: Result, path: Path) -> None:
     n = len(system.elements)
     cols = min(n, 3)
     rows = math.ceil(n / cols)
-    fig, axes = plt.subplots(rows, cols, figsize=(3.4 * cols, 3.0 * rows), squeeze=False)
+    fig, axes = subplots(rows, cols, figsize=(3.4 * cols, 3.0 * rows), squeeze=False)
     k = 0
     for i, el in enumerate(system.elements):
         ax = axes.flat[i]
@@ -157,9 +162,10 @@ def plot_element_loops(result: Result, path: Path) -> None:
     save(fig, path)
 
 
+@styled
 def plot_energy(result: Result, path: Path) -> None:
     """Cumulative input, kinetic and hysteretic energy, and the balance error."""
-    fig, axes = plt.subplots(2, 1, figsize=(8, 4.8), sharex=True, height_ratios=(3, 1))
+    fig, axes = subplots(2, 1, figsize=(8, 4.8), sharex=True, height_ratios=(3, 1))
     _line(axes[0], result, "E_input_J", label="input", lw=1.0)
     _line(axes[0], result, "E_hysteretic_J", label="hysteretic (dissipated + stored)", lw=1.0)
     if "E_viscous_J" in result.columns:
@@ -171,7 +177,7 @@ def plot_energy(result: Result, path: Path) -> None:
     _line(axes[1], result, "E_error_J", lw=0.7, color="C3")
     axes[1].set_ylabel("error [J]")
     axes[1].set_xlabel("time [s]")
-    save(fig, path)
+    save(fig, path, TIME_MARGINS)
 
 
 def write_plots(result: Result, out: Path) -> list[str]:

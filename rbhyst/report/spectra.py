@@ -7,20 +7,21 @@ from pathlib import Path
 import numpy as np
 
 from ..response.located import CENTRE, GROUND, LocatedSpectra
-from ._style import plt, save
+from ._style import save, styled, subplots
 
 G_STANDARD = 9.80665
 #: one line style per damping ratio, in the deck's order
 DAMPING_STYLES = ("-", "--", ":", "-.", (0, (5, 1, 1, 1)), (0, (1, 3)))
 
 
+@styled
 def plot_spectra(spectra: LocatedSpectra, path: Path, title: str = "") -> None:
     """sa against frequency, log axes, one panel per direction: the ground in black, G and
     the points in colour, one line style per damping (isolation shows as the body's curves
     falling below the ground's above the isolation frequency)."""
     s = spectra.spectrum
     directions = list(dict.fromkeys(d for _, d in spectra.signals))
-    fig, axes = plt.subplots(1, len(directions), figsize=(5.2 * len(directions), 4.4), squeeze=False)
+    fig, axes = subplots(1, len(directions), figsize=(5.2 * len(directions), 4.4), squeeze=False)
     colours = {loc: "k" if loc == GROUND else f"C{i}" for i, loc in
                enumerate(loc for loc in spectra.locations if loc != GROUND)}
     colours[GROUND] = "k"

@@ -6,9 +6,10 @@ import math
 from pathlib import Path
 
 import numpy as np
+from matplotlib.ticker import NullFormatter
 
 from ..study import Run, Study
-from ._style import plt, save
+from ._style import save, styled, subplots
 
 MARKERS = ("o", "s", "^", "D", "v", "P", "X", "*")
 
@@ -32,9 +33,10 @@ def _reference_note(study: Study) -> str:
     return f"reference: DOP853, rtol {ref['rtol']:g}, {ref['reversals']} reversals, {ref['wall_s']:.3g} s"
 
 
+@styled
 def plot_error_vs_runtime(study: Study, path: Path) -> None:
     """Log-log err_max against wall time, one line per integrator, each point labelled with its dt."""
-    fig, ax = plt.subplots(figsize=(7.5, 5.2))
+    fig, ax = subplots(figsize=(7.5, 5.2))
     for k, (name, runs) in enumerate(study.by_integrator().items()):
         ok = _ok(runs)
         if not ok:
@@ -60,9 +62,10 @@ def plot_error_vs_runtime(study: Study, path: Path) -> None:
     save(fig, path)
 
 
+@styled
 def plot_error_vs_dt(study: Study, path: Path) -> None:
     """Log-log err_max against dt, one line per integrator, with a slope-2 guide."""
-    fig, ax = plt.subplots(figsize=(7.5, 5.2))
+    fig, ax = subplots(figsize=(7.5, 5.2))
     lo, hi = math.inf, 0.0
     for k, (name, runs) in enumerate(study.by_integrator().items()):
         ok = _ok(runs)
@@ -90,7 +93,7 @@ def plot_error_vs_dt(study: Study, path: Path) -> None:
                 fontsize=7, color="0.3", xytext=(3, 0), textcoords="offset points", va="top")
     ax.set_xticks(sorted(study.dts))
     ax.set_xticklabels([_dt_label(dt) for dt in sorted(study.dts)])
-    ax.xaxis.set_minor_formatter(plt.NullFormatter())
+    ax.xaxis.set_minor_formatter(NullFormatter())
     ax.set_xlabel("dt")
     ax.set_ylabel("error: max over u1, u2, θ3 of max|q − q_ref| / max|q_ref|")
     ax.set_title(f"Error against time step{': ' + study.title if study.title else ''}\n"

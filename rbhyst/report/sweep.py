@@ -18,7 +18,7 @@ import numpy as np
 from matplotlib.ticker import MaxNLocator
 
 from ..sweep.tables import PERCENTILE
-from ._style import plt, save
+from ._style import save, styled, subplots
 
 PLOT_FILES = ("ida.png", "vary.png", "motions.png")
 #: the peaks drawn, where the cases have them (every peak is in cases.csv and stats.csv)
@@ -77,7 +77,7 @@ def _grid(n: int, cols: int = 3, legend: bool = False):
     cells = n + legend
     cols = min(cols, cells)
     rows = -(-cells // cols)
-    fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, 3.5 * rows), squeeze=False)
+    fig, axes = subplots(rows, cols, figsize=(4.2 * cols, 3.5 * rows), squeeze=False)
     for ax in axes.ravel()[:n]:
         ax.xaxis.set_major_locator(MaxNLocator(5))
         ax.ticklabel_format(axis="x", style="sci", scilimits=(-2, 4), useMathText=True)
@@ -99,6 +99,7 @@ def _groups(cases, vary_keys) -> dict[tuple, list[dict]]:
     return out
 
 
+@styled
 def plot_ida(ok, quantities, vary_keys, scale_label, path: Path) -> None:
     groups = _groups(ok, vary_keys)
     shown = list(groups.items())[:MAX_GROUPS]
@@ -143,9 +144,10 @@ def _positions(values: list[str]) -> tuple[dict[str, float], list[str] | None]:
         return {v: float(i) for i, v in enumerate(order)}, order
 
 
+@styled
 def plot_vary(ok, quantities, keys, scale_label, path: Path) -> None:
     levels = sorted({c["scale"] for c in ok})
-    fig, axes = plt.subplots(len(keys), len(quantities), figsize=(4.2 * len(quantities), 3.3 * len(keys)),
+    fig, axes = subplots(len(keys), len(quantities), figsize=(4.2 * len(quantities), 3.3 * len(keys)),
                              squeeze=False)
     for r, key in enumerate(keys):
         values = [c["vary"][key] for c in ok if c["vary"][key] != ""]
@@ -173,6 +175,7 @@ def plot_vary(ok, quantities, keys, scale_label, path: Path) -> None:
     save(fig, path)
 
 
+@styled
 def plot_motions(ok, quantities, path: Path) -> None:
     fig, axes = _grid(len(quantities))
     for ax, q in zip(axes, quantities):

@@ -6,13 +6,14 @@ from pathlib import Path
 
 import numpy as np
 
-from ._style import plt, save
+from ._style import save, styled, subplots
 
 G_STANDARD = 9.80665
 #: a cross response below this is not drawn (a symmetric body's is rounding: 1e-17)
 SHOWN_ABOVE = 1e-6
 
 
+@styled
 def plot_transmissibility(result, path: Path, title: str = "") -> None:
     """log-log T; along the excitation solid, across it dashed; T = 1 marked."""
     table = result.table()
@@ -20,7 +21,7 @@ def plot_transmissibility(result, path: Path, title: str = "") -> None:
     amplitudes = list(dict.fromkeys(table[:, 1]))
     cols = min(len(locations), 2)
     rows = -(-len(locations) // cols)
-    fig, axes = plt.subplots(rows, cols, figsize=(5.4 * cols, 4.2 * rows), squeeze=False)
+    fig, axes = subplots(rows, cols, figsize=(5.4 * cols, 4.2 * rows), squeeze=False)
     across = "x2" if result.direction == "x1" else "x1"
     for ax, loc in zip(axes.flat, locations):
         for i, amp in enumerate(amplitudes):
