@@ -3,7 +3,7 @@
 The Python API (see README, "Python API"): ``load_deck``, ``run``, and the ``Result`` they give.
 """
 
-__version__ = "0.1.0"
+__version__ = "0.2.0"
 
 __all__ = ["load_deck", "run", "InputError", "AnalysisError", "__version__"]
 

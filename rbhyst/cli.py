@@ -102,6 +102,8 @@ def run_line(result) -> str:
         name, worst = max(acc["estimated_error"].items(), key=lambda kv: kv[1])
         line += f"; estimated error {100 * worst:.2g} % ({name}{', sensitive' if acc['status'] == 'sensitive' else ''}, " \
                 f"{acc['wall_s']:.2g} s to estimate)"
+    else:  # an answer always says how far it can be trusted, even when that is "not said"
+        line += "; error not estimated" + (f" ({acc['status']})" if acc else " (analysis.estimate_error = false)")
     return line
 
 

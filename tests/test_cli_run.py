@@ -293,3 +293,12 @@ def test_the_kernels_run_as_plain_python_too(tmp_path, method):
     py = np.loadtxt(tmp_path / "py" / "time_history.csv", delimiter=",", skiprows=1)
     jit = np.loadtxt(tmp_path / "jit" / "time_history.csv", delimiter=",", skiprows=1)
     np.testing.assert_allclose(py, jit, rtol=1e-9, atol=1e-12 * np.max(np.abs(jit)))
+
+
+def test_a_run_without_an_estimate_says_so(tmp_path):
+    """Switching the estimate off leaves no doubt: the console says the error was not estimated."""
+    path = write_deck(tmp_path, seed_deck(duration=0.5, estimate_error=False))
+    code, out, err = run("run", path, "--no-plots")
+    assert code == 0, err
+    assert "; error not estimated (analysis.estimate_error = false)" in err
+    assert json.loads((tmp_path / "results" / "deck" / "summary.json").read_text())["accuracy"] is None
