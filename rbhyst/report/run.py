@@ -181,25 +181,24 @@ def plot_energy(result: Result, path: Path) -> None:
 
 
 def write_plots(result: Result, out: Path) -> list[str]:
-    """All the PNGs of a run; returns the file names written."""
-    written = []
+    """All the PNGs of a run (on two cores where it is safe: rbhyst.report.parallel); returns
+    the file names written."""
+    from functools import partial
 
-    def do(fn, name, *args):
-        fn(result, *args, out / name)
-        written.append(name)
+    from .parallel import draw_all
 
-    do(plot_body, "model.png")
+    jobs = {"model.png": partial(plot_body, result, out / "model.png")}
     if result.layout.has_support:
-        do(plot_excitation, "support_motion.png")
+        jobs["support_motion.png"] = partial(plot_excitation, result, out / "support_motion.png")
     for k, name in enumerate(("response_x1.png", "response_x2.png", "response_theta3.png")):
-        do(plot_response, name, k)
+        jobs[name] = partial(plot_response, result, k, out / name)
     for name, _ in result.layout.points:
-        do(plot_point, f"response_{name}.png", name)
-    do(plot_element_loops, "element_loops.png")
+        jobs[f"response_{name}.png"] = partial(plot_point, result, name, out / f"response_{name}.png")
+    jobs["element_loops.png"] = partial(plot_element_loops, result, out / "element_loops.png")
     if result.spectra is not None:
         from .spectra import plot_spectra
 
-        plot_spectra(result.spectra, out / "spectra.png", title=result.system.title)
-        written.append("spectra.png")
-    do(plot_energy, "energy.png")
-    return written
+        jobs["spectra.png"] = partial(plot_spectra, result.spectra, out / "spectra.png", title=result.system.title)
+    jobs["energy.png"] = partial(plot_energy, result, out / "energy.png")
+    draw_all(list(jobs.values()))
+    return list(jobs)
