@@ -211,8 +211,11 @@ class PlotData:
         n = len(table)
         if n == 0:
             return
-        kernel("reduce_rows")(np.asfortranarray(table), self._seen, self.bucket, extremes.max, extremes.t_max, extremes.min, extremes.t_min,
-                    self.lo, self.hi, self.t_lo, self.t_hi)
+        # columns must be contiguous (the kernel runs down each); a block of rows of the run's
+        # column-major table is, though not F-contiguous as a whole: no copy for it
+        columns = table if table.strides[0] == table.itemsize else np.asfortranarray(table)
+        kernel("reduce_rows")(columns, self._seen, self.bucket, extremes.max, extremes.t_max, extremes.min,
+                              extremes.t_min, self.lo, self.hi, self.t_lo, self.t_hi)
         first = (-self._seen) % self.stride
         # (a strided view would keep the whole chunk alive: copied; stride 1 keeps it anyway)
         self._samples.append(table if self.stride == 1 else table[first::self.stride].copy())
