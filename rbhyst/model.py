@@ -37,7 +37,6 @@ class Excitation:
     #: a load that does not vary: the weight, once the static equilibrium under it is known
     constant: tuple[float, float, float] = (0.0, 0.0, 0.0)
     duration: float | None = None  # of the longest record or finite pulse
-    finest_dt: float | None = None  # the longest step that follows every signal (record samples, pulse shapes)
 
     @property
     def has_support(self) -> bool:
@@ -296,18 +295,17 @@ def implausible_geometry(body: Body, elements) -> list[str]:
 
 
 def _signal(spec, scale_units: dict[str, float], base: Path,
-            notes: list[str]) -> tuple[Signal, float | None, float | None]:
-    """A callable of time in SI units, the signal's own end and the longest step that follows
-    it (a record's sample step; a sine's period or a pulse's duration over
-    signals.POINTS_PER_FEATURE); what the run should say about the signal goes to ``notes``."""
+            notes: list[str]) -> tuple[Signal, float | None]:
+    """A callable of time in SI units and the signal's own end; what the run should say about
+    the signal goes to ``notes``."""
     factor = scale_units[spec.units]
     if isinstance(spec, dk.Sine):
         s = signals.sine(spec.amplitude * factor, spec.frequency_hz, spec.phase_deg, spec.start, spec.cycles,
                          spec.ramp_cycles)
-        return s, s.end, s.step
+        return s, s.end
     if isinstance(spec, dk.Pulse):
         s = signals.Pulse(spec.type, spec.amplitude * factor, spec.duration, spec.start)
-        return s, s.end, s.step
+        return s, s.end
     path = Path(spec.file)
     if not path.is_absolute():
         path = base / path
@@ -315,7 +313,7 @@ def _signal(spec, scale_units: dict[str, float], base: Path,
     check_declared(record.declared, spec.units)  # the file's own word on its units must agree
     notes.extend(record.notes)
     series = Series(record.series.t0, record.series.dt, record.series.values * factor * spec.scale)
-    return series, series.duration, series.dt
+    return series, series.duration
 
 
 def _excitation(deck: dk.Deck, base: Path, body: Body, notes: list[str]) -> Excitation:
@@ -323,7 +321,7 @@ def _excitation(deck: dk.Deck, base: Path, body: Body, notes: list[str]) -> Exci
     if ex is None:
         return Excitation()
     sig: dict[str, Signal] = {}
-    durations, steps = [], []
+    durations = []
     problems = []
 
     def add(name, spec, units, loc):
@@ -331,7 +329,7 @@ def _excitation(deck: dk.Deck, base: Path, body: Body, notes: list[str]) -> Exci
             return
         said: list[str] = []
         try:
-            s, dur, step = _signal(spec, units, base, said)
+            s, dur = _signal(spec, units, base, said)
         except InputError as err:
             problems.extend(f"{loc}: {p}" for p in err.problems)
             return
@@ -339,8 +337,6 @@ def _excitation(deck: dk.Deck, base: Path, body: Body, notes: list[str]) -> Exci
         sig[name] = s
         if dur is not None:
             durations.append(dur)
-        if step is not None:
-            steps.append(step)
 
     if ex.support is not None:
         add("ag1", ex.support.x1, dk.ACCEL_UNITS, "excitation.support.x1")
@@ -363,7 +359,6 @@ def _excitation(deck: dk.Deck, base: Path, body: Body, notes: list[str]) -> Exci
     return Excitation(
         point=point,
         duration=max(durations) if durations else None,
-        finest_dt=min(steps) if steps else None,
         **sig,
     )
 
