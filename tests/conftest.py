@@ -95,6 +95,22 @@ def deck_dict():
     return copy.deepcopy(seed_deck())
 
 
+def invoke(*args) -> tuple[int, str]:
+    """An rbhyst command in this process: (exit status, what it wrote to stderr)."""
+    from typer.testing import CliRunner
+
+    from rbhyst.cli import app
+
+    res = CliRunner().invoke(app, [str(a) for a in args])
+    return res.exit_code, res.stderr
+
+
+def snapshot(folder: Path) -> dict[str, tuple[bytes, int]]:
+    """Every file below ``folder`` (hidden ones too): its bytes and mtime."""
+    return {p.relative_to(folder).as_posix(): (p.read_bytes(), p.stat().st_mtime_ns)
+            for p in sorted(folder.rglob("*")) if p.is_file()}
+
+
 def records_or_skip() -> Path:
     if not (RECORDS / "I-ELC180.AT2").exists():
         pytest.skip("the El Centro records (../shared/records) are not on this machine")

@@ -19,28 +19,16 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from typer.testing import CliRunner
 
 import rbhyst.outdir
 from rbhyst.calibration import protocol
-from rbhyst.cli import RECORD_MARK, app
+from rbhyst.cli import RECORD_MARK
 from rbhyst.deck import Loops, parse_deck
 from rbhyst.errors import InputError
 from rbhyst.hysteresis import loop
 from rbhyst.outdir import MANIFEST, STAGING_PREFIX, read_manifest, staged_directory
 from rbhyst.records import read_table
-from conftest import TABLE3_SHEAR, seed_deck, square_linear_deck, write_deck
-
-
-def invoke(*args):
-    res = CliRunner().invoke(app, [str(a) for a in args])
-    return res.exit_code, res.stderr
-
-
-def snapshot(folder: Path) -> dict[str, tuple[bytes, int]]:
-    """Every file below ``folder`` (hidden ones too): its bytes and mtime."""
-    return {p.relative_to(folder).as_posix(): (p.read_bytes(), p.stat().st_mtime_ns)
-            for p in sorted(folder.rglob("*")) if p.is_file()}
+from conftest import TABLE3_SHEAR, invoke, seed_deck, snapshot, square_linear_deck, write_deck
 
 
 def entries(folder: Path) -> set[str]:

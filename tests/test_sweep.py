@@ -21,26 +21,14 @@ import numpy as np
 import pytest
 import tomli_w
 import yaml
-from typer.testing import CliRunner
 
-from rbhyst.cli import app
 from rbhyst.deck import ACCEL_UNITS
 from rbhyst.errors import InputError
 from rbhyst.sweep import load_sweep, run_sweep
 from rbhyst.sweep.store import FOLDER, JOURNAL
-from conftest import DECKS, ROOT, records_or_skip
+from conftest import DECKS, ROOT, invoke, records_or_skip, snapshot
 
 G = ACCEL_UNITS["g"]
-
-
-def invoke(*args):
-    res = CliRunner().invoke(app, [str(a) for a in args])
-    return res.exit_code, res.stderr
-
-
-def snapshot(folder: Path) -> dict[str, tuple[bytes, int]]:
-    return {p.relative_to(folder).as_posix(): (p.read_bytes(), p.stat().st_mtime_ns)
-            for p in sorted(folder.rglob("*")) if p.is_file()}
 
 
 def read_cases(path: Path) -> list[dict[str, str]]:
