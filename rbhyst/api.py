@@ -88,7 +88,7 @@ def _solve(system, settings, keep: bool, csv_path=None, plan=None) -> Result:
         end = max(ends) if ends and None not in ends else None  # (a sine without end never ends)
         note = unfinished_note(end, result.steps * result.settings.dt, periods, dampings)
         result.notes += [note] if note else []
-    result.warnings += warnings_for(result.accuracy, result.settings)
+    result.warnings += warnings_for(result.accuracy, result.settings, result.stats)
     return result
 
 

@@ -27,17 +27,21 @@ VISCOUS_COLUMN = "E_viscous_J"
 
 @dataclass
 class Raw:
-    """What an integrator computed at consecutive steps: times (n,), the state (n, 3) each,
-    element rows' deformation and force (n, rows), cumulative energies (n, 4): input,
-    kinetic, hysteretic, viscous."""
+    """What an integrator computed at consecutive steps: times (n,), displacements and
+    velocities (n, 3) each, element rows' deformation and force (n, rows), cumulative
+    energies (n, 4): input, kinetic, hysteretic, viscous. Accelerations are not an
+    integrator's to report: :class:`Layout` takes them from the equation of motion."""
 
     t: np.ndarray
     d: np.ndarray
     v: np.ndarray
-    a: np.ndarray
     u: np.ndarray
     f: np.ndarray
     e: np.ndarray
+
+    def slice(self, start: int, stop: int) -> "Raw":
+        """Rows start..stop-1."""
+        return Raw(*(getattr(self, k)[start:stop] for k in ("t", "d", "v", "u", "f", "e")))
 
 
 class Layout:
@@ -82,6 +86,8 @@ class Layout:
         self.names = tuple(names)
         self._expand = np.array([el.row for el in system.elements for _ in range(el.count)], dtype=int)
         self._rb = system.bvec * system.mult[:, None]  # rows' share of R = sum mult b f
+        self._minv = 1.0 / np.asarray(system.mass, dtype=float)
+        self._ct = system.C.T.copy() if self.damped else None
 
     def index(self, name: str) -> int:
         return self.names.index(name)
@@ -95,13 +101,23 @@ class Layout:
         out[:, 0] = raw.t
         out[:, 1:4] = raw.d - self.origin
         out[:, 4:7] = raw.v
-        out[:, 7:10] = raw.a
-        out[:, 10:13] = raw.a
+        r = out[:, self.slices["R"]]
+        r[:] = raw.f @ self._rb
+        # the total acceleration from the equation of motion at the row's own state and time:
+        # M at = p(t) - R - C v (the elements and dampers see only the relative motion, so it is
+        # continuous where the support acceleration jumps; a jump of an external force: the row
+        # holds the force's value on its span). Not the integrator's own acceleration, which
+        # near a jump or a kink carries the load averaged over a step.
+        at = out[:, 10:13]
+        at[:] = self.system.excitation.forces(raw.t) - r
+        if self.damped:
+            at -= raw.v @ self._ct
+        at *= self._minv
+        out[:, 7:10] = at
         if self.has_support:
             ag = self.system.excitation.support(raw.t)
-            out[:, 10:12] += ag
+            out[:, 7:9] -= ag
             out[:, self.slices["ag"]] = ag
-        out[:, self.slices["R"]] = raw.f @ self._rb
         first = self.slices["points"].start
         for k, (_, x) in enumerate(self.points):
             c = first + len(POINT_COLUMNS) * k
@@ -124,15 +140,12 @@ class Layout:
         return out
 
 
-def spectrum_columns(layout: Layout) -> list[tuple[tuple[str, str], int]]:
-    """((location, direction), column) of every total acceleration whose spectra a run gives:
-    the ground along each direction it moves in, G and every point along x1 and x2."""
-    from .response.located import CENTRE, GROUND
+def body_spectrum_columns(layout: Layout) -> list[tuple[tuple[str, str], int]]:
+    """((location, direction), column) of every total acceleration of the body whose spectra a
+    run gives: G and every point along x1 and x2 (the ground's come from its signals)."""
+    from .response.located import CENTRE
 
-    ex = layout.system.excitation
-    out = [((GROUND, f"x{k}"), layout.index(f"ag{k}_m_s2"))
-           for k, signal in ((1, ex.ag1), (2, ex.ag2)) if signal is not None]
-    out += [((CENTRE, f"x{k}"), layout.index(f"at{k}_m_s2")) for k in (1, 2)]
+    out = [((CENTRE, f"x{k}"), layout.index(f"at{k}_m_s2")) for k in (1, 2)]
     for name, _ in layout.points:
         out += [((name, f"x{k}"), layout.index(f"{name}_at{k}_m_s2")) for k in (1, 2)]
     return out
@@ -233,3 +246,22 @@ class PlotData:
         t = np.column_stack([self.t_lo, self.t_hi]).ravel()
         y = np.column_stack([self.lo[:, col], self.hi[:, col]]).ravel()
         return t, y
+
+
+def estimate_columns(layout: Layout) -> list[tuple[str, int, str]]:
+    """(key, column, family) of every column whose error a run's estimate gives: G's motion and
+    total acceleration, the mounts' resultant, each element's force and each point's motion.
+    The key is the CSV column without its unit (``at1``, ``R3``, ``e3_f``, ``top_at2``); the
+    family groups the columns whose scale is shared where one of them is at rest."""
+    index = {name: i for i, name in enumerate(layout.names)}
+    out = [(k, index[f"{k}_{unit}"], fam) for fam, pairs in (
+        ("d", (("u1", "m"), ("u2", "m"), ("theta3", "rad"))),
+        ("at", (("at1", "m_s2"), ("at2", "m_s2"), ("alphat3", "rad_s2"))),
+        ("R", (("R1", "N"), ("R2", "N"), ("R3", "Nm")))) for k, unit in pairs]
+    for name, _ in layout.points:
+        out += [(f"{name}_{k}", index[f"{name}_{k}_{unit}"], fam)
+                for k, unit, fam in (("u1", "m", "pd"), ("u2", "m", "pd"), ("at1", "m_s2", "pat"),
+                                     ("at2", "m_s2", "pat"))]
+    n_el = layout.system.n_output_elements
+    out += [(f"e{k}_f", index[f"e{k}_f_N"], "ef") for k in range(1, n_el + 1)]
+    return out

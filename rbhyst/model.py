@@ -78,13 +78,20 @@ class Excitation:
         return bounds, nsub
 
     def support(self, t: np.ndarray) -> np.ndarray:
-        """(n, 2) support acceleration."""
+        """(n, 2) support acceleration, each signal's value at t (at a jump, that of its span)."""
         out = np.zeros((len(t), 2))
         if self.ag1 is not None:
             out[:, 0] = self.ag1(t)
         if self.ag2 is not None:
             out[:, 1] = self.ag2(t)
         return out
+
+    def forces(self, t: np.ndarray) -> np.ndarray:
+        """(n, 3) the generalized external forces on the body at t, support motion left out: the
+        constant load (the weight, held by the static preload) and (p1, p2, p3) (eq. 13); at a
+        jump, each signal's value on its span (rows hold the pulse's side of its ends)."""
+        forces = {k: s for k, s in self.signals.items() if k in FORCE_SIGNALS}
+        return self._combine({k: s(t) for k, s in forces.items()}, len(t), None)
 
     def load(self, t: np.ndarray, mass: np.ndarray) -> np.ndarray:
         """(n, 3) generalized load p = -M (ag1, ag2, 0) + (p1, p2, p3), eq. 13 for p3."""
@@ -113,23 +120,52 @@ class Excitation:
             values[k] = v
         return self._combine(values, len(t), mass)
 
-    def _combine(self, values: dict[str, np.ndarray], n: int, mass: np.ndarray) -> np.ndarray:
+    def weights(self, mass: np.ndarray | None) -> dict[str, np.ndarray]:
+        """How a unit of each signal enters the generalized load: -M along its axis for a
+        support acceleration, (1, 0, -x2P), (0, 1, x1P), (0, 0, 1) for p1, p2, m3 (eq. 13)."""
+        x1p, x2p = self.point
+        out = {"p1": np.array([1.0, 0.0, -x2p]), "p2": np.array([0.0, 1.0, x1p]), "m3": np.array([0.0, 0.0, 1.0])}
+        if mass is not None:
+            out["ag1"] = np.array([-mass[0], 0.0, 0.0])
+            out["ag2"] = np.array([0.0, -mass[1], 0.0])
+        return out
+
+    def analytic_table(self, mass: np.ndarray) -> np.ndarray:
+        """(signals, ROW_SIZE + 3): every analytic signal as a row of signals.ROW_SIZE floats and
+        its three weights into the load, for compiled code that evaluates them exactly."""
+        w = self.weights(mass)
+        rows = [s.row() + list(w[k]) for k, s in self.signals.items() if not isinstance(s, Series)]
+        return np.array(rows, dtype=float).reshape(-1, signals.ROW_SIZE + 3)
+
+    def record_pieces(self, brk: np.ndarray, mass: np.ndarray) -> np.ndarray:
+        """(pieces, 2, 3) the constant load and the records' share of it at both ends of every
+        piece brk[k]..brk[k + 1], each end's value seen from inside the piece (a record is zero
+        before its first sample and after its last: a piece outside it sees zero). The
+        records are linear between their samples: with the samples among the breakpoints,
+        linear pieces are exact."""
+        ta, tb = brk[:-1], brk[1:]
+        out = np.empty((len(ta), 2, 3))
+        out[:] = self.constant
+        w = self.weights(mass)
+        for k, s in self.signals.items():
+            if isinstance(s, Series):
+                out[:, 0, :] += np.where(ta < s.end, s(ta), 0.0)[:, None] * w[k]
+                out[:, 1, :] += np.where(tb > s.start, s(tb), 0.0)[:, None] * w[k]
+        return out
+
+    def _combine(self, values: dict[str, np.ndarray], n: int, mass: np.ndarray | None) -> np.ndarray:
         p = np.empty((n, 3))
         p[:] = self.constant
-        if "ag1" in values:
-            p[:, 0] -= mass[0] * values["ag1"]
-        if "ag2" in values:
-            p[:, 1] -= mass[1] * values["ag2"]
-        x1p, x2p = self.point
-        if "p1" in values:
-            p[:, 0] += values["p1"]
-            p[:, 2] -= values["p1"] * x2p
-        if "p2" in values:
-            p[:, 1] += values["p2"]
-            p[:, 2] += values["p2"] * x1p
-        if "m3" in values:
-            p[:, 2] += values["m3"]
+        w = self.weights(mass)
+        for k, v in values.items():
+            for c in range(3):
+                if w[k][c] != 0.0:
+                    p[:, c] += w[k][c] * v
         return p
+
+
+#: the signals that act on the body as external forces (not support motion)
+FORCE_SIGNALS = ("p1", "p2", "m3")
 
 
 @dataclass(frozen=True)

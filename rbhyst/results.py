@@ -59,8 +59,16 @@ class Result:
     accuracy: dict | None = None
     csv_path: Path | None = None  # where the rows went when they were streamed
     solver: dict | None = None  # what an adaptive integration took (steps, reversals, ...)
-    q_sample: np.ndarray | None = None  # (n, 4) t, u1, u2, theta3 at every k-th step: for the error estimate
+    #: (n, 1 + k) time and the columns the error estimate compares (history.estimate_columns), at
+    #: every ``compare_every``-th step
+    compared: np.ndarray | None = None
+    compare_every: int = 1
     spectra: "LocatedSpectra | None" = None  # output.spectra: of the ground, G and the points, over every step
+
+    @property
+    def q_sample(self) -> np.ndarray:
+        """(n, 4) time, u1, u2, theta3 at the steps the estimate compares."""
+        return self.compared[:, :4]
 
     # ---------------------------------------------------------------- the table by name
 

@@ -14,6 +14,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
+#: an analytic signal as one row of floats, for compiled code that evaluates it exactly
+#: (rbhyst.kernels.dop853): kind, amplitude, omega, phase, start, stop (inf: none), ramp, duration
+SINE, HALF_SINE, HAVERSINE, SAWTOOTH, TRIANGLE = range(5)
+ROW_SIZE = 8
+
 #: steps per sine period or per pulse: the load is linear between compute steps, and at 40 a
 #: half-sine's impulse is followed to 0.1 % (1 - (pi/40)^2/12 of the exact 2/pi A T)
 POINTS_PER_FEATURE = 40
@@ -32,12 +37,18 @@ class Sine:
     ramp: float = 0.0
 
     def __call__(self, t) -> np.ndarray:
+        """The signal at t; at its start and stop it has its span's value (the span is closed)."""
         t = np.asarray(t, dtype=float)
         on = t >= self.start if self.stop is None else (t >= self.start) & (t <= self.stop)
+        return np.where(on, self.inside(t), 0.0)
+
+    def inside(self, t) -> np.ndarray:
+        """The sine's formula at t, as it is within its span (the limit at either end)."""
+        t = np.asarray(t, dtype=float)
         value = self.amplitude * np.sin(self.omega * (t - self.start) + self.phase)
         if self.ramp > 0.0:
             value = value * ramp_envelope((t - self.start) / self.ramp)
-        return np.where(on, value, 0.0)
+        return value
 
     @property
     def end(self) -> float | None:
@@ -56,6 +67,11 @@ class Sine:
     def acts_before(self, t_end: float) -> bool:
         return self.amplitude != 0.0 and self.start < t_end
 
+    def row(self) -> list[float]:
+        """This signal as a row of the compiled evaluator's table (see ROW_SIZE)."""
+        stop = math.inf if self.stop is None else self.stop
+        return [SINE, self.amplitude, self.omega, self.phase, self.start, stop, self.ramp, 0.0]
+
 
 def _half_sine(tau):
     return np.sin(np.pi * tau)
@@ -73,12 +89,13 @@ def _triangle(tau):
     return 1.0 - np.abs(2.0 * tau - 1.0)
 
 
-#: pulse shapes on tau = (t - start) / duration in [0, 1], peak 1; and where they have corners
+#: pulse shapes on tau = (t - start) / duration in [0, 1], peak 1; where they have corners; their
+#: kind in the compiled evaluator's table
 SHAPES = {
-    "half-sine": (_half_sine, ()),
-    "haversine": (_haversine, ()),
-    "terminal-peak-sawtooth": (_terminal_peak_sawtooth, ()),  # drops to zero at tau = 1
-    "triangle": (_triangle, (0.5,)),
+    "half-sine": (_half_sine, (), HALF_SINE),
+    "haversine": (_haversine, (), HAVERSINE),
+    "terminal-peak-sawtooth": (_terminal_peak_sawtooth, (), SAWTOOTH),  # drops to zero at tau = 1
+    "triangle": (_triangle, (0.5,), TRIANGLE),
 }
 
 
@@ -92,11 +109,15 @@ class Pulse:
     start: float
 
     def __call__(self, t) -> np.ndarray:
+        """The pulse at t; at its start and end it has its span's value (the span is closed)."""
         t = np.asarray(t, dtype=float)
         tau = (t - self.start) / self.duration
-        on = (tau >= 0.0) & (tau <= 1.0)
-        shape, _ = SHAPES[self.kind]
-        return np.where(on, self.amplitude * shape(np.clip(tau, 0.0, 1.0)), 0.0)
+        return np.where((tau >= 0.0) & (tau <= 1.0), self.inside(t), 0.0)
+
+    def inside(self, t) -> np.ndarray:
+        """The pulse's shape at t, as it is within its span (the limit at either end)."""
+        tau = (np.asarray(t, dtype=float) - self.start) / self.duration
+        return self.amplitude * SHAPES[self.kind][0](np.clip(tau, 0.0, 1.0))
 
     @property
     def end(self) -> float:
@@ -113,6 +134,10 @@ class Pulse:
 
     def acts_before(self, t_end: float) -> bool:
         return self.amplitude != 0.0 and self.start < t_end
+
+    def row(self) -> list[float]:
+        """This pulse as a row of the compiled evaluator's table (see ROW_SIZE)."""
+        return [SHAPES[self.kind][2], self.amplitude, 0.0, 0.0, self.start, self.end, 0.0, self.duration]
 
 
 def ramp_envelope(tau) -> np.ndarray:

@@ -14,7 +14,7 @@ import numpy as np
 
 from . import integrators, kernels
 from .errors import AnalysisError, InputError
-from .history import Extremes, Layout, PlotData, Raw, spectrum_columns
+from .history import Extremes, Layout, PlotData, Raw, body_spectrum_columns, estimate_columns
 from .kernels import N_STATE, N_X, X_A, X_CUR, X_D, X_ITER, X_LEVEL_USED, X_OMEGA_DT2, X_STEPS, X_SUBSTEPS
 from .model import System
 from .results import CsvWriter, Result, RunStats
@@ -22,8 +22,8 @@ from .settings import Settings, settings_from_deck  # noqa: F401  (re-exported: 
 
 #: bytes of rows a chunk may hold (raw state and table): bounds a run's memory
 CHUNK_BYTES = 16_000_000
-#: at most this many steps of a run are compared with the adaptive solution (every k-th)
-COMPARE_POINTS = 200_000
+#: at most this many values (rows x columns) of a run are kept for its error estimate (every k-th row)
+COMPARE_VALUES = 4_000_000
 
 
 def grid(system: System, s: Settings) -> tuple[int, int]:
@@ -42,15 +42,27 @@ def output_steps(system: System, s: Settings) -> int:
     return max(1, math.ceil(duration / s.dt - 1e-9))
 
 
+def compute_times(bounds: np.ndarray, substeps: np.ndarray, dt: float) -> np.ndarray:
+    """Every compute step's end time after t = 0 where output steps bounds[i]..bounds[i + 1]
+    take substeps[i] compute steps each (Excitation.substeps): the resolution at which a run
+    follows its excitation, and at which its response spectra are driven."""
+    parts = [dt * (lo + np.arange(1, (hi - lo) * m + 1) / m)
+             for lo, hi, m in zip(bounds[:-1], bounds[1:], substeps)]
+    return np.concatenate(parts) if parts else np.empty(0)
+
+
 class Rows:
-    """Where a run's rows go: reductions over every step, and every ``every``-th row kept or streamed."""
+    """Where a run's rows go: reductions over every step, every ``every``-th row kept or
+    streamed, the columns its error estimate compares at every ``compare_every``-th step,
+    and the response spectra of G and the points at every compute step."""
 
     def __init__(self, layout: Layout, n_steps: int, every: int, keep: bool, csv_path=None,
-                 spectra=None, dt: float | None = None):
+                 spectra=None, dt: float | None = None, compare_every: int | None = None):
         """spectra: (dampings, periods) of the response spectra to stream (Settings.spectra), for
-        rows ``dt`` apart; None for none."""
+        rows ``dt`` apart (or as :meth:`add` says); None for none."""
         self.layout = layout
         self.every = every
+        self.dt = dt
         self.extremes = Extremes(layout.names)
         self.plot = PlotData(n_steps + 1, len(layout.names))
         # the kept rows, allocated once and column by column (as Layout.table writes them): no
@@ -59,28 +71,32 @@ class Rows:
         self._kept = np.empty((len(layout.names), n_rows)).T if keep else None
         self._csv = CsvWriter(csv_path, layout.names) if csv_path is not None else None
         self._next = 0  # global index of the next row
-        # displacements at up to COMPARE_POINTS steps, for the error estimate (rbhyst.accuracy)
-        self.q_stride = max(1, -(-(n_steps + 1) // COMPARE_POINTS))
-        self._q: list[np.ndarray] = []
+        # the columns the error estimate compares (rbhyst.accuracy), at every compare_every-th step
+        self._compare_columns = np.array([0] + [c for _, c, _ in estimate_columns(layout)])
+        self.compare_every = compare_every or max(1, -(-(n_steps + 1) * len(self._compare_columns) // COMPARE_VALUES))
+        self._compared: list[np.ndarray] = []
         self.spectra = None
         if spectra is not None:
             from .response.located import SpectraSink
 
-            located = spectrum_columns(layout)
+            located = body_spectrum_columns(layout)
             self._spectrum_columns = [c for _, c in located]
             self.spectra = SpectraSink([label for label, _ in located], *spectra, dt=dt)
 
-    def add(self, raw: Raw) -> None:
-        n = len(raw.t)
-        direct = self._kept is not None and self.every == 1
+    def add(self, raw: Raw, sub: int = 1) -> None:
+        """Rows of consecutive steps; with ``sub`` > 1, rows of every compute step of dt / sub,
+        of which every sub-th (the last of each output step) is an output row: the spectra see
+        them all, everything else the output rows."""
+        n = len(raw.t) // sub
+        direct = self._kept is not None and self.every == 1 and sub == 1
         table = self.layout.table(raw, out=self._kept[self._next:self._next + n] if direct else None)
+        if self.spectra is not None:  # every compute step, whatever output.every writes
+            self.spectra.update(table[:, self._spectrum_columns], self.dt / sub)
+        if sub > 1:
+            table = table[sub - 1::sub]
         self.plot.update(table, self.extremes)
-        if self.spectra is not None:  # every step of dt, whatever output.every writes
-            self.spectra.update(table[:, self._spectrum_columns])
-        first_q = (-self._next) % self.q_stride
-        q = table[first_q::self.q_stride, 0:4].copy()
-        q[:, 1:4] += self.layout.origin  # absolute, as the adaptive solution compares them
-        self._q.append(q)
+        first = (-self._next) % self.compare_every
+        self._compared.append(table[first::self.compare_every][:, self._compare_columns])
         first = (-self._next) % self.every
         written = table[first::self.every]
         if self._kept is not None and not direct:
@@ -90,14 +106,15 @@ class Rows:
             self._csv.add(written)
         self._next += len(table)
 
-    def spectra_result(self):
-        """The LocatedSpectra of every row so far (None without output.spectra)."""
+    def body_spectra(self):
+        """The LocatedSpectra of G and the points over every row so far (None without output.spectra)."""
         return None if self.spectra is None else self.spectra.result()
 
     @property
-    def q_sample(self) -> np.ndarray:
-        """(n, 4): time and u1, u2, theta3 at every q_stride-th step."""
-        return np.vstack(self._q)
+    def compared(self) -> np.ndarray:
+        """(n, 1 + columns): time and the estimate's columns (history.estimate_columns) at every
+        compare_every-th step."""
+        return np.vstack(self._compared)
 
     def close(self) -> np.ndarray | None:
         if self._csv is not None:
@@ -176,7 +193,7 @@ class Plan:
                 f"{rows * n_cols * 8 / 1e9:.3g} GB: stream them to a folder instead (rbhyst.run(deck, out=...)), "
                 f"or raise output.every (to {every_for(MAX_KEPT_BYTES // 2)} or more)")
 
-    def run(self, keep: bool = True, csv_path=None) -> Result:
+    def run(self, keep: bool = True, csv_path=None, compare_every: int | None = None) -> Result:
         return self.method.solve(self.system, self.settings, keep=keep, csv_path=csv_path)
 
 
@@ -210,7 +227,8 @@ class _FixedStepPlan(Plan):
         self.layout = Layout(system, s.points)
         self.chunk = min(_chunk_rows(ne, len(self.layout.names), self.nsub), self.n_steps)
         # load (or compile) the kernel
-        self._call(np.zeros((1, 3)), 0.0, next(iter(self.coef)), 0, *self._state(), _Buffers(1, ne))
+        nsub = next(iter(self.coef))
+        self._call(np.zeros((1, 3)), 0.0, nsub, s.dt / nsub, nsub, 0, *self._state(), _Buffers(1, ne))
 
     def _state(self):
         """The loop's state at t = 0: at rest, elements virgin, and the initial acceleration."""
@@ -234,46 +252,56 @@ class _FixedStepPlan(Plan):
         x[X_CUR] = 0
         return x, st
 
-    def _call(self, load, t0, nsub, n, x, st, buf):
+    def _call(self, load, t0, nsub, h_c, rows_every, n, x, st, buf):
+        """n rows of the loop: compute steps of h_c with the coefficients of ``nsub`` substeps a
+        step of dt, a row after every ``rows_every``-th of them."""
         from .kernels.compiled import kernel
 
         s = self.settings
         ne = self.bvec.shape[0]
         self.info = np.zeros(kernels.INFO_SIZE)
         return kernel("run_chunk")(self.method.kernel_id, self.coef[nsub], self.system.mass, self.minv, self.cm, self.damped,
-                         self.method.own_acceleration, self.bvec, self.system.mult, self.params, self.wgt, load,
-                         t0, s.dt / nsub, nsub, n, s.max_omega_dt, self.level0[nsub], s.max_substep_level,
-                         s.newton_tol, s.newton_max_iter, x, st, np.zeros((ne, N_STATE)), np.zeros((ne, 2)),
-                         buf.d, buf.v, buf.a, buf.u, buf.f, buf.e, self.info)
+                                   self.bvec, self.system.mult, self.params, self.wgt, load,
+                                   t0, h_c, rows_every, n, s.max_omega_dt, self.level0[nsub], s.max_substep_level,
+                                   s.newton_tol, s.newton_max_iter, x, st, np.zeros((ne, N_STATE)), np.zeros((ne, 2)),
+                                   buf.d, buf.v, buf.u, buf.f, buf.e, self.info)
 
-    def segments(self):
-        """(first output step, steps, substeps each): runs of equal splitting, at most a chunk long."""
+    def segments(self, fine: bool = False):
+        """(first output step, steps, substeps each): runs of equal splitting, at most a chunk of
+        rows long (of compute-step rows where ``fine``)."""
         for lo, hi, nsub in zip(self.bounds[:-1], self.bounds[1:], self.substeps):
-            for k in range(int(lo), int(hi), self.chunk):
-                yield k, min(self.chunk, int(hi) - k), int(nsub)
+            chunk = max(1, self.chunk // int(nsub)) if fine else self.chunk
+            for k in range(int(lo), int(hi), chunk):
+                yield k, min(chunk, int(hi) - k), int(nsub)
 
-    def run(self, keep: bool = True, csv_path=None) -> Result:
+    def run(self, keep: bool = True, csv_path=None, compare_every: int | None = None) -> Result:
         system, s = self.system, self.settings
         ne = self.bvec.shape[0]
         x, st = self._state()
         buf = _Buffers(self.chunk, ne)
-        rows = Rows(self.layout, self.n_steps, s.every, keep, csv_path, spectra=s.spectra, dt=s.dt)
-        start_row = Raw(t=np.zeros(1), d=x[None, X_D:X_D + 3].copy(), v=np.zeros((1, 3)), a=x[None, X_A:X_A + 3].copy(),
+        rows = Rows(self.layout, self.n_steps, s.every, keep, csv_path, spectra=s.spectra, dt=s.dt,
+                    compare_every=compare_every)
+        start_row = Raw(t=np.zeros(1), d=x[None, X_D:X_D + 3].copy(), v=np.zeros((1, 3)),
                         u=st[None, 0, :, kernels.U].copy(), f=st[None, 0, :, kernels.F].copy(),
                         e=np.zeros((1, kernels.N_E)))
+        # the spectra see every compute step where the excitation is split (a short pulse's
+        # response between the rows); nothing else does, and without spectra no row is made
+        fine = rows.spectra is not None
         wall = 0.0
         try:
             rows.add(start_row)
-            for first, n, nsub in self.segments():
+            for first, n, nsub in self.segments(fine):
                 t_c = s.dt * (first + np.arange(n * nsub + 1) / nsub)
                 load = np.ascontiguousarray(system.excitation.load_nodes(t_c, s.dt / nsub, system.mass))
+                sub = nsub if fine else 1
                 tic = time.perf_counter()
-                written = self._call(load, s.dt * first, nsub, n, x, st, buf)
+                written = self._call(load, s.dt * first, nsub, s.dt / nsub, nsub // sub, n * sub, x, st, buf)
                 wall += time.perf_counter() - tic
                 _raise_on_failure(system, s, self.info)
-                assert written == n, "the loop wrote fewer rows than asked"
-                t = s.dt * (first + 1 + np.arange(n))  # t_n = n dt, never accumulated
-                rows.add(Raw(t=t, d=buf.d[:n], v=buf.v[:n], a=buf.a[:n], u=buf.u[:n], f=buf.f[:n], e=buf.e[:n]))
+                assert written == n * sub, "the loop wrote fewer rows than asked"
+                t = t_c[1:] if sub > 1 else s.dt * (first + 1 + np.arange(n))  # t_n = n dt, never accumulated
+                m = n * sub
+                rows.add(Raw(t=t, d=buf.d[:m], v=buf.v[:m], u=buf.u[:m], f=buf.f[:m], e=buf.e[:m]), sub=sub)
         finally:
             table = rows.close()
         stats = RunStats(
@@ -283,8 +311,8 @@ class _FixedStepPlan(Plan):
             newton_iterations=int(x[X_ITER]) if self.method.name == "newmark" else 0, wall_s=wall,
         )
         return Result(system=system, settings=s, columns=self.layout.names, table=table, extremes=rows.extremes,
-                      plot=rows.plot, stats=stats, layout=self.layout, csv_path=csv_path, q_sample=rows.q_sample,
-                      spectra=rows.spectra_result())
+                      plot=rows.plot, stats=stats, layout=self.layout, csv_path=csv_path, compared=rows.compared,
+                      compare_every=rows.compare_every, spectra=run_spectra(system, s, rows.body_spectra()))
 
 
 class _Buffers:
@@ -293,10 +321,20 @@ class _Buffers:
     def __init__(self, n: int, ne: int):
         self.d = np.empty((n, 3))
         self.v = np.empty((n, 3))
-        self.a = np.empty((n, 3))
         self.u = np.empty((n, ne))
         self.f = np.empty((n, ne))
         self.e = np.empty((n, kernels.N_E))
+
+
+def run_spectra(system: System, s: Settings, body):
+    """The run's LocatedSpectra: the ground's, from its signals themselves (rbhyst.response.ground),
+    and the body's (G and the points) as the rows drove them; None without output.spectra."""
+    if body is None:
+        return None
+    from .response.ground import ground_spectra
+
+    n_steps = output_steps(system, s)
+    return ground_spectra(system.excitation, n_steps * s.dt, *s.spectra).joined(body)
 
 
 def _chunk_rows(ne: int, n_cols: int, nsub: int) -> int:

@@ -110,13 +110,17 @@ def test_reference_handles_a_load_that_jumps_on_and_off(tmp_path):
     assert np.all(rel_errors(res.d, exact) < 1e-8), rel_errors(res.d, exact)
 
 
-def test_load_pieces_follow_records_exactly_and_find_kinks(tmp_path):
+def test_load_pieces_follow_records_and_signals_exactly_and_find_kinks(tmp_path):
     system = assemble(parse_deck(coupled_linear_deck(start=0.1, cycles=3.0)), tmp_path)
-    brk, coef = reference.load_pieces(system, 2.0)
+    pieces = reference.load_pieces(system, 2.0)
     # a breakpoint within 1e-9 s of the start and of each sine's end (3/2.5 and 3/4 s after it)
     for t in (0.1, 0.1 + 3 / 2.5, 0.1 + 3 / 4.0):
-        assert np.min(np.abs(brk - t)) < 1e-9, t
-    # a record: linear between its samples, so its samples are breakpoints and the fit is exact
+        assert np.min(np.abs(pieces.brk - t)) < 1e-9, t
+    # the analytic signals are evaluated, not fitted: the load everywhere but at its jumps, exactly
+    t = np.linspace(0.0, 2.0, 4001)
+    t = t[np.min(np.abs(t[:, None] - pieces.brk[None, :]), axis=1) > 1e-9]
+    np.testing.assert_array_equal(pieces.at(t), system.excitation.load(t, system.mass))
+    # a record: linear between its samples, so its samples are breakpoints and linear pieces are exact
     rec = tmp_path / "rec.csv"
     rng = np.random.default_rng(1)
     np.savetxt(rec, np.column_stack([0.01 * np.arange(101), rng.normal(size=101)]), delimiter=",",
@@ -124,15 +128,24 @@ def test_load_pieces_follow_records_exactly_and_find_kinks(tmp_path):
     deck = coupled_linear_deck()
     deck["excitation"] = {"support": {"x1": {"file": str(rec), "units": "m/s2"}}}
     system = assemble(parse_deck(deck), tmp_path)
-    brk, coef = reference.load_pieces(system, 1.0)
-    assert np.all(np.isin(np.round(0.01 * np.arange(101), 9), np.round(brk, 9)))
+    pieces = reference.load_pieces(system, 1.0)
+    assert np.all(np.isin(np.round(0.01 * np.arange(101), 9), np.round(pieces.brk, 9)))
     t = np.linspace(0.0, 1.0, 3001)
-    k = np.clip(np.searchsorted(brk, t, side="right") - 1, 0, len(brk) - 2)
-    x = (2 * t - brk[k] - brk[k + 1]) / (brk[k + 1] - brk[k])
-    fitted = np.einsum("nj,njc->nc", x[:, None] ** np.arange(reference.NP), coef[k])
     exact = system.excitation.load(t, system.mass)
-    assert np.max(np.abs(fitted - exact)) < 1e-11 * np.max(np.abs(exact))
+    assert np.max(np.abs(pieces.at(t) - exact)) < 1e-12 * np.max(np.abs(exact))
     assert isinstance(system.excitation.ag1, Series)
+    assert pieces.ends.shape == (len(pieces.brk) - 1, 2, 3)  # two numbers a piece: memory of the record's size
+
+
+def test_a_fast_long_sine_costs_no_memory_per_step(tmp_path):
+    """A 113 Hz force for 13.5 s: no piece per period, no table per step (it once took 31 million
+    samples of load and gigabytes)."""
+    deck = coupled_linear_deck()
+    deck["excitation"] = {"force": {"p1": {"type": "sine", "amplitude": 80.0, "frequency_hz": 113.181,
+                                            "units": "N"}}}
+    system = assemble(parse_deck(deck), tmp_path)
+    pieces = reference.load_pieces(system, 13.5)
+    assert len(pieces.brk) == 2 and pieces.analytic.shape == (1, 11)
 
 
 @pytest.fixture(scope="module")

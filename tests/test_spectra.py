@@ -154,9 +154,10 @@ def test_damped_steady_state_amplitudes(zeta):
 @pytest.mark.slow
 def test_running_peaks_match_a_fine_ode_solution():
     # a random piecewise-linear input, each segment integrated by DOP853 at rtol 1e-12 from
-    # the end state of the last, evaluated at the same points as the recurrence (the substeps
-    # of the short periods included); fed one sample at a time, the running peaks compare
-    # after every sample
+    # the end state of the last; fed one sample at a time, the running peaks compare after
+    # every sample with the peaks of the ODE's solution at the recurrence's own points (the
+    # substeps of the short periods included: never below them) and between them (200 points
+    # a substep: the parabolas through the points recover most of what the points miss)
     rng = np.random.default_rng(7)
     dt, n = 0.01, 120
     acc = rng.normal(0.0, 3.0, n)
@@ -171,11 +172,13 @@ def test_running_peaks_match_a_fine_ode_solution():
         stream.update(acc[i:i + 1])
         spec = stream.result()
         sd_run[i], sa_run[i] = spec.sd[:, :, 0], spec.sa[:, :, 0]
+    dense = 200
+    gained = missed = 0.0
     for j, (T, mj) in enumerate(zip(periods, m)):
         w = 2 * np.pi / T
         c, k = 2 * dampings * w, w * w  # the three dampings at once: y = (x1, x2, x3, v1, v2, v3)
         y = np.zeros(6)
-        sd = sa = np.zeros(3)
+        peaks = {"points": [np.zeros(3), np.zeros(3)], "dense": [np.zeros(3), np.zeros(3)]}
         for i in range(n - 1):
             a0, a1 = acc[i], acc[i + 1]
 
@@ -183,13 +186,20 @@ def test_running_peaks_match_a_fine_ode_solution():
                 return np.concatenate([y[3:], -c * y[3:] - k * y[:3] - (a0 + (a1 - a0) * t / dt)])
 
             sol = solve_ivp(rhs, (0.0, dt), y, method="DOP853", rtol=1e-12, atol=1e-16,
-                            t_eval=dt * np.arange(1, mj + 1) / mj)
-            x, v = sol.y[:3], sol.y[3:]
+                            t_eval=dt * np.arange(1, mj * dense + 1) / (mj * dense))
             y = sol.y[:, -1]
-            sd = np.maximum(sd, np.abs(x).max(axis=1))
-            sa = np.maximum(sa, np.abs(c[:, None] * v + k * x).max(axis=1))
-            assert sd_run[i + 1, j] == pytest.approx(sd, rel=1e-9), (T, i)
-            assert sa_run[i + 1, j] == pytest.approx(sa, rel=1e-9), (T, i)
+            for name, every in (("points", dense), ("dense", 1)):
+                x, v = sol.y[:3, every - 1::every], sol.y[3:, every - 1::every]
+                pk = peaks[name]
+                pk[0] = np.maximum(pk[0], np.abs(x).max(axis=1))
+                pk[1] = np.maximum(pk[1], np.abs(c[:, None] * v + k * x).max(axis=1))
+            for q, run in ((0, sd_run), (1, sa_run)):
+                got, low, top = run[i + 1, j], peaks["points"][q], peaks["dense"][q]
+                assert np.all(got >= low * (1 - 1e-9)), (T, i)
+                assert np.all(np.abs(got - top) <= 2e-3 * top), (T, i, got, low, top)  # the points alone: 19 % here
+                gained += float(np.sum(got - low))
+                missed += float(np.sum(top - low))
+    assert gained > 0.98 * missed  # what the points alone would miss is found
 
 
 def test_substeps_find_the_peaks_that_samples_miss():

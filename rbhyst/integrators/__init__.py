@@ -25,8 +25,6 @@ class Method:
     kernel_id: int | None = None
     #: the step depends on K0 (Chang, Chen-Ricles, KR-alpha): omega_0 h must stay resolved
     structure_dependent: bool = False
-    #: its acceleration variable is its own (KR-alpha): rows report equilibrium instead
-    own_acceleration: bool = False
     #: (mass (3,), K0 (3, 3), C (3, 3), h) -> (N_COEF, 3, 3)
     coefficients: Callable[[np.ndarray, np.ndarray, np.ndarray, float], np.ndarray] | None = None
     #: (system, settings, keep=, csv_path=) -> Result, for methods outside the fixed-step loop

@@ -95,7 +95,6 @@ def method(rho_inf: float = RHO_INF, name: str | None = None) -> Method:
         explicit=True,
         kernel_id=KERNEL_ID,
         structure_dependent=True,
-        own_acceleration=True,
         coefficients=functools.partial(coefficients, rho_inf=rho_inf),
     )
 

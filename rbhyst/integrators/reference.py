@@ -15,10 +15,10 @@ tables are scipy's), compiled with numba. Two kinds of events end a step:
   to exactly that time, and the element starts its new branch there, from the force
   it has (eq. 14 with t_P = the reversal). Interior double crossings are looked for
   on a cubic Hermite interpolant of b . v and, when suspected, on the dense output.
-- a breakpoint of the load: support motion and forces are fitted piece by piece with
-  degree-7 polynomials (Chebyshev nodes); a record's samples are breakpoints (between
-  them it is linear, so the fit is exact) and a piece that does not fit to 1e-12 of
-  the load's peak (a sine's end, any other kink) is split until it does.
+- a breakpoint of the load: a record's samples (between them it is linear, and so are
+  its pieces) and an analytic signal's start, end and corners (between them the kernel
+  evaluates the sine or pulse itself, exactly, at every time it asks; nothing is fitted
+  or stored per step).
 
 So the only error is the ODE solver's: local error per step below
 atol + rtol |y| (rtol = 1e-12 by default; atol = rtol times a displacement scale from
@@ -38,17 +38,16 @@ import numpy as np
 from . import dop853_tableau as _dop
 from ..errors import AnalysisError
 from ..kernels.compiled import kernel
-from ..kernels.dop853_layout import (NP, NS, NY, R_ELEMENT, R_EVENTS, R_FEV, R_HMAX, R_HMIN, R_INFO, R_REJECTED,
+from ..kernels.dop853_layout import (NS, NY, R_ELEMENT, R_EVENTS, R_FEV, R_HMAX, R_HMIN, R_INFO, R_REJECTED,
                                      R_START_FLIPS, R_STATUS, R_STEPS, R_TIME, ST_NONFINITE, ST_OK, ST_OVERFLOW,
                                      ST_STEP_TOO_SMALL, ST_TOO_MANY_STEPS)
 from ..records import Series
+from ..signals import SINE
 from ..history import Layout, Raw
 from ..results import Result, RunStats
 from . import Method
 
 RTOL = 1e-12
-MAX_PIECE = 0.02  # s, longest piece of the load before the fit check splits it
-FIT_TOL = 1e-12  # of the load's peak
 MAX_STEPS = 50_000_000
 
 # DOP853 tables (12 stages, the 13th row is f at the end of the step, 3 more for dense output)
@@ -61,74 +60,56 @@ _D = np.ascontiguousarray(_dop.D, dtype=float)
 
 
 # --------------------------------------------------------------------------
-# compiled core
-# --------------------------------------------------------------------------
-# the load as polynomial pieces
+# the load: records as linear pieces, analytic signals as they are
 # --------------------------------------------------------------------------
 
 
-def _nodes(n: int) -> np.ndarray:
-    """Chebyshev points of the first kind on [-1, 1] (no end points: a jump sits on a breakpoint)."""
-    return np.cos((2.0 * np.arange(n) + 1.0) * np.pi / (2.0 * n))[::-1]
+@dataclass(frozen=True)
+class Pieces:
+    """The load as the kernel evaluates it: breakpoints (n + 1,), the records' share (with the
+    constant load) at both ends of each piece (n, 2, 3), and the analytic signals' table
+    (signals, ROW_SIZE + 3) evaluated exactly at every time the kernel asks; ``signals``: those
+    signals and their weights into the load, for the same evaluation in Python."""
+
+    brk: np.ndarray
+    ends: np.ndarray
+    analytic: np.ndarray
+    signals: tuple = ()
+
+    def at(self, t: np.ndarray) -> np.ndarray:
+        """(n, 3) the load at times t, as the kernel sees it (a jump at a breakpoint: its right side)."""
+        t = np.asarray(t, dtype=float)
+        k = np.clip(np.searchsorted(self.brk, t, side="right") - 1, 0, len(self.brk) - 2)
+        ta, tb = self.brk[k], self.brk[k + 1]
+        w = ((t - ta) / (tb - ta))[:, None]
+        out = self.ends[k, 0] + w * (self.ends[k, 1] - self.ends[k, 0])
+        mid = 0.5 * (ta + tb)
+        for signal, weight in self.signals:
+            stop = math.inf if signal.end is None else signal.end
+            inside = (signal.start <= mid) & (mid <= stop)
+            out += np.where(inside, signal.inside(t), 0.0)[:, None] * weight
+        return out
 
 
-def load_pieces(system, t_end: float, max_piece: float = MAX_PIECE, tol: float = FIT_TOL):
-    """Breakpoints (n + 1,) and monomial coefficients (n, NP, 3) in x in [-1, 1] of each piece.
-
-    A record's samples are breakpoints (it is linear between them); pieces are at most
-    ``max_piece`` long, and any piece whose fit misses the load by more than ``tol`` times
-    its peak (per component) at check points between the nodes is split in two.
-    """
+def load_pieces(system, t_end: float) -> Pieces:
+    """The load of ``system`` over [0, t_end] in pieces between breakpoints: a record's samples
+    (between them it is linear, so linear pieces are exact) and an analytic signal's start, end
+    and corners (between them it is smooth: the kernel evaluates it exactly, no fit and nothing
+    stored per step, so memory stays that of the records however long or fast the signals)."""
     ex = system.excitation
     pts = [np.array([0.0, t_end])]
-    for sig in (ex.ag1, ex.ag2, ex.p1, ex.p2, ex.m3):
-        if isinstance(sig, Series):
-            tk = sig.t0 + sig.dt * np.arange(len(sig.values))
-        elif sig is not None:
-            tk = np.asarray(getattr(sig, "breakpoints", ()), dtype=float)  # a sine's or pulse's ends and corners
-        else:
-            continue
+    for sig in ex.signals.values():
+        tk = sig.times if isinstance(sig, Series) else np.asarray(sig.breakpoints, dtype=float)
         pts.append(tk[(tk > 0.0) & (tk < t_end)])
     brk = np.unique(np.concatenate(pts))
     keep = np.concatenate([[True], np.diff(brk) > 1e-12 * max(1.0, t_end)])
     brk = brk[keep]
     brk[-1] = t_end
-    lengths = np.diff(brk)
-    split = np.maximum(1, np.ceil(lengths / max_piece - 1e-9)).astype(int)
-    brk = np.concatenate([brk[i] + lengths[i] * np.arange(split[i]) / split[i] for i in range(len(lengths))]
-                         + [[t_end]])
-    xn = _nodes(NP)
-    vinv = np.linalg.inv(np.vander(xn, NP, increasing=True))
-    xc = np.concatenate([0.5 * (xn[:-1] + xn[1:]), [-0.999, 0.999]])
-    vc = np.vander(xc, NP, increasing=True)
-    mass = system.mass
-
-    def fit(ta, tb):
-        mid, half = 0.5 * (ta + tb), 0.5 * (tb - ta)
-        vals = ex.load((mid[:, None] + half[:, None] * xn).ravel(), mass).reshape(len(ta), NP, 3)
-        return np.einsum("jk,nkc->njc", vinv, vals)
-
-    ta, tb = brk[:-1], brk[1:]
-    coef = fit(ta, tb)
-    scale = None
-    for _ in range(60):
-        mid, half = 0.5 * (ta + tb), 0.5 * (tb - ta)
-        exact = ex.load((mid[:, None] + half[:, None] * xc).ravel(), mass).reshape(len(ta), len(xc), 3)
-        approx = np.einsum("mj,njc->nmc", vc, coef)
-        if scale is None:
-            peak = np.max(np.abs(exact), axis=(0, 1))
-            scale = np.where(peak > 0, peak, 1.0)
-        bad = np.any(np.abs(approx - exact) > tol * scale, axis=(1, 2)) & (tb - ta > 1e-9)
-        if not bad.any():
-            break
-        mids = 0.5 * (ta[bad] + tb[bad])
-        new_ta = np.concatenate([ta[~bad], ta[bad], mids])
-        new_tb = np.concatenate([tb[~bad], mids, tb[bad]])
-        order = np.argsort(new_ta)
-        new_coef = np.concatenate([coef[~bad], fit(ta[bad], mids), fit(mids, tb[bad])])
-        ta, tb, coef = new_ta[order], new_tb[order], new_coef[order]
-    brk = np.concatenate([ta, [tb[-1]]])
-    return np.ascontiguousarray(brk), np.ascontiguousarray(coef)
+    brk = np.ascontiguousarray(brk)
+    weights = ex.weights(system.mass)
+    analytic = tuple((s, weights[k]) for k, s in ex.signals.items() if not isinstance(s, Series))
+    return Pieces(brk, np.ascontiguousarray(ex.record_pieces(brk, system.mass)),
+                  np.ascontiguousarray(ex.analytic_table(system.mass)), analytic)
 
 
 # --------------------------------------------------------------------------
@@ -136,10 +117,24 @@ def load_pieces(system, t_end: float, max_piece: float = MAX_PIECE, tol: float =
 # --------------------------------------------------------------------------
 
 
-def _scales(system, brk, coef, rtol):
+def _load_samples(pieces: Pieces, per_piece: int = 4, most: int = 200_000) -> np.ndarray:
+    """(n, 3) the load at a few points of every piece (at most ``most`` points in all, and
+    every sine's peaks reached to a few per cent): the scale the tolerances are set from."""
+    brk = pieces.brk
+    t = np.concatenate([brk, (brk[:-1, None] + np.diff(brk)[:, None] * np.arange(1, per_piece) / per_piece).ravel()])
+    span = brk[-1] - brk[0]
+    for row in pieces.analytic:
+        if row[0] == SINE and row[2] > 0.0:
+            t = np.concatenate([t, np.linspace(brk[0], brk[-1], int(min(most, 8 * row[2] * span / (2 * np.pi) + 2)))])
+    if len(t) > most:
+        t = np.random.default_rng(0).choice(t, most, replace=False)
+    return pieces.at(np.sort(t))
+
+
+def _scales(system, pieces: Pieces, rtol):
     """atol for (q, v): rtol x the quasi-static response to the load with the reversal stiffness."""
     kr = (system.bvec.T * (system.mult * system.k_reversal)) @ system.bvec
-    p = np.vstack([coef.sum(axis=1), np.einsum("njc,j->nc", coef, (-1.0) ** np.arange(NP))])  # piece ends
+    p = _load_samples(pieces)
     static = np.linalg.solve(kr, p.T).T
     rg = math.sqrt(system.mass[2] / system.mass[0])
     length = max(float(np.max(np.abs(static[:, :2]))), float(np.max(np.abs(static[:, 2]))) * rg)
@@ -151,13 +146,13 @@ def _scales(system, brk, coef, rtol):
     return np.concatenate([q, q * w1, [0.0]]), length, w1
 
 
-def _initial_state(system, coef):
+def _initial_state(system, pieces: Pieces):
     """(4, rows) branch sign, u_P, gap and antiderivative of every element row at the start
     (gap NaN: virgin, worked out in the kernel), and q at the start: rest, at the static
     equilibrium under gravity when there is one, the elements as its path left them."""
     from ..kernels import A, G, S, U
 
-    s0 = _initial_branches(system, coef)
+    s0 = _initial_branches(system, pieces)
     init = np.zeros((4, len(s0)))
     init[0] = s0
     init[2] = np.nan
@@ -173,11 +168,12 @@ def _initial_state(system, coef):
     return init, y0
 
 
-def _initial_branches(system, coef):
+def _initial_branches(system, pieces: Pieces):
     """Each element starts moving the way the initial acceleration (else the load's slope) pushes it."""
-    j = np.arange(NP)
-    p0 = np.einsum("jc,j->c", coef[0], (-1.0) ** j)  # the load at t = 0 (x = -1) and its slope
-    dp0 = np.einsum("jc,j->c", coef[0], j * (-1.0) ** (j - 1))
+    first = pieces.brk[1] - pieces.brk[0]
+    h = 1e-6 * first
+    p0, p1 = pieces.at(np.array([0.0, h]))
+    dp0 = (p1 - p0) / h  # the load's slope at the start, from inside the first piece
     static = getattr(system, "static", None)
     if static is not None:
         p0 = p0 - static.r  # the weight is carried by the elements
@@ -195,12 +191,11 @@ class TooManySteps(AnalysisError):
 
 @dataclass
 class Solution:
-    """What the integration gives at the output times: state (q, v, input energy), equilibrium
-    accelerations, element rows' deformation and force, hysteretic work."""
+    """What the integration gives at the output times: state (q, v, input energy, viscous work),
+    element rows' deformation and force, hysteretic work."""
 
     t: np.ndarray
     y: np.ndarray  # (n, NY)
-    a: np.ndarray
     eu: np.ndarray
     ef: np.ndarray
     eh: np.ndarray
@@ -210,23 +205,29 @@ class Solution:
     def q(self) -> np.ndarray:
         return self.y[:, :3]
 
+    def raw(self, system) -> Raw:
+        """The rows as a run's table takes them (rbhyst.history)."""
+        v = self.y[:, 3:6]
+        energy = np.column_stack([self.y[:, 6], 0.5 * (v * v) @ system.mass, self.eh, self.y[:, 7]])
+        return Raw(t=self.t, d=self.q, v=v, u=self.eu, f=self.ef, e=energy)
+
 
 def integrate(system, t_out: np.ndarray, rtol: float = RTOL, pieces=None, max_steps: int = MAX_STEPS) -> Solution:
     """Integrate from rest to t_out[-1] with output at the increasing times t_out (from 0).
 
-    ``pieces``: the load's (breakpoints, coefficients) from :func:`load_pieces`, when a caller
+    ``pieces``: the load from :func:`load_pieces`, when a caller
     integrates the same scene twice; ``max_steps``: a budget of steps (events cost one each).
     Raises AnalysisError where it cannot finish (TooManySteps past the budget).
     """
     t_out = np.ascontiguousarray(t_out, dtype=float)
     t_end = float(t_out[-1])
     n_rows = len(t_out)
-    brk, coef = pieces if pieces is not None else load_pieces(system, t_end)
-    atol, length, w1 = _scales(system, brk, coef, rtol)
+    pieces = pieces if pieces is not None else load_pieces(system, t_end)
+    brk, coef, sig = pieces.brk, pieces.ends, pieces.analytic
+    atol, length, w1 = _scales(system, pieces, rtol)
     ne = system.bvec.shape[0]
-    init, y0 = _initial_state(system, coef)
+    init, y0 = _initial_state(system, pieces)
     out_y = np.zeros((n_rows, NY))
-    out_a = np.zeros((n_rows, 3))
     out_eu = np.zeros((n_rows, ne))
     out_ef = np.zeros((n_rows, ne))
     out_eh = np.zeros(n_rows)
@@ -235,13 +236,13 @@ def integrate(system, t_out: np.ndarray, rtol: float = RTOL, pieces=None, max_st
     args = (minv, np.ascontiguousarray(system.bvec), system.mult, np.ascontiguousarray(system.params),
             np.ascontiguousarray(system.C))
     work = (np.zeros((6, ne)), np.zeros((7, NY)), np.zeros((16, NY)), np.zeros((7, NY)), np.zeros(3), np.zeros(NS + 1))
-    tail = (rtol, atol, init, y0, 1e-6, int(max_steps), _A, _B, _C, _E3, _E5, _D, out_y, out_a, out_eu, out_ef, out_eh, info, *work)
+    tail = (rtol, atol, init, y0, 1e-6, int(max_steps), _A, _B, _C, _E3, _E5, _D, out_y, out_eu, out_ef, out_eh, info, *work)
     _integrate = kernel("integrate")
     # compile (or load) before the clock starts, on a one-piece problem
-    _integrate(*args, brk[:2].copy(), coef[:1].copy(), t_out[:1].copy(), *tail)
+    _integrate(*args, brk[:2].copy(), coef[:1].copy(), sig, t_out[:1].copy(), *tail)
     info[:] = 0.0
     start = time.perf_counter()
-    rows = _integrate(*args, brk, coef, t_out, *tail)
+    rows = _integrate(*args, brk, coef, sig, t_out, *tail)
     wall = time.perf_counter() - start
     status = int(info[R_STATUS])
     if status != ST_OK or rows != n_rows:
@@ -263,8 +264,8 @@ def integrate(system, t_out: np.ndarray, rtol: float = RTOL, pieces=None, max_st
         "atol_v": atol[3:6].tolist(),
         "atol_basis": {"displacement_scale_m": length, "lowest_circular_frequency_rad_s": w1},
         "events": "reversals: element velocity b.v crossing zero against its branch, located on the dense "
-                  "output and stepped to exactly; load breakpoints: record samples, the ends and corners of "
-                  "analytic signals, and pieces of a degree-7 fit to 1e-12 of the peak",
+                  "output and stepped to exactly; load breakpoints: record samples (linear between them), the "
+                  "ends and corners of analytic signals (evaluated exactly between them)",
         "load_pieces": int(len(coef)),
         "steps": int(info[R_STEPS]),
         "rejected_steps": int(info[R_REJECTED]),
@@ -275,44 +276,59 @@ def integrate(system, t_out: np.ndarray, rtol: float = RTOL, pieces=None, max_st
         "largest_step_s": float(info[R_HMAX]),
         "wall_s": wall,
     }
-    return Solution(t_out, out_y, out_a, out_eu, out_ef, out_eh, stats)
+    return Solution(t_out, out_y, out_eu, out_ef, out_eh, stats)
 
 
 def solve_with_stats(system, settings, rtol: float = RTOL, t_out: np.ndarray | None = None,
                      keep: bool = True, csv_path=None) -> tuple[Result, dict]:
     """A Result of the adaptive integration and what it took (for study.json).
 
-    Output at every t_n = n dt (rows every ``settings.every`` steps kept), or at the increasing
-    times ``t_out`` (from 0) if given, all kept: a study asks for the union of several grids.
+    Output at every t_n = n dt (rows every ``settings.every`` steps kept; with output.spectra
+    also at every compute step where the excitation is split, which only the spectra see, as
+    in a fixed-step run), or at the increasing times ``t_out`` (from 0) if given, all kept: a
+    study asks for the union of several grids.
     """
-    from ..simulate import Rows, grid
+    from ..simulate import Rows, compute_times, grid, run_spectra
 
     n_steps, _ = grid(system, settings)
     every = 1
     spectra = None  # (a study's union of grids is not uniform: no spectra there)
+    segments = None
     if t_out is None:
         if n_steps < settings.every:
             from ..errors import InputError
 
             raise InputError(f"output.every: {settings.every} is more than the {n_steps} steps of the analysis")
         every = settings.every
-        t_out = settings.dt * np.arange(n_steps + 1)
         spectra = settings.spectra
+        if spectra is not None:
+            bounds, substeps = system.excitation.substeps(settings.dt, n_steps)
+            t_out = np.concatenate([[0.0], compute_times(bounds, substeps, settings.dt)])
+            segments = (bounds, substeps)
+        else:
+            t_out = settings.dt * np.arange(n_steps + 1)
     sol = integrate(system, t_out, rtol)
-    n_rows = len(sol.t)
-    v = sol.y[:, 3:6]
-    energy = np.column_stack([sol.y[:, 6], 0.5 * (v * v) @ system.mass, sol.eh, sol.y[:, 7]])
-    raw = Raw(t=sol.t, d=sol.q, v=v, a=sol.a, u=sol.eu, f=sol.ef, e=energy)
+    raw = sol.raw(system)
     layout = Layout(system, settings.points)
-    rows = Rows(layout, n_rows - 1, every, keep, csv_path, spectra=spectra, dt=settings.dt)
+    rows = Rows(layout, n_steps if segments else len(sol.t) - 1, every, keep, csv_path, spectra=spectra, dt=settings.dt)
     try:
-        rows.add(raw)
+        rows.add(raw.slice(0, 1))
+        if segments is None:
+            rows.add(raw.slice(1, len(sol.t)))
+        else:
+            i = 1
+            bounds, substeps = segments
+            for lo, hi, nsub in zip(bounds[:-1], bounds[1:], substeps):
+                n = int(hi - lo) * int(nsub)
+                rows.add(raw.slice(i, i + n), sub=int(nsub))
+                i += n
     finally:
         table = rows.close()
     stats = RunStats(steps=n_steps, steps_taken=sol.stats["steps"], wall_s=sol.stats["wall_s"])
     result = Result(system=system, settings=settings, columns=layout.names, table=table, extremes=rows.extremes,
-                    plot=rows.plot, stats=stats, layout=layout, csv_path=csv_path, q_sample=rows.q_sample,
-                    solver=sol.stats, spectra=rows.spectra_result())
+                    plot=rows.plot, stats=stats, layout=layout, csv_path=csv_path, compared=rows.compared,
+                    compare_every=rows.compare_every, solver=sol.stats,
+                    spectra=run_spectra(system, settings, rows.body_spectra()))
     return result, sol.stats
 
 

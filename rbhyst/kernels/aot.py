@@ -21,18 +21,18 @@ PACKAGE = Path(__file__).resolve().parents[1]
 SOURCES = ("hysteresis.py", "kernels/__init__.py", "kernels/vrm.py", "kernels/elements.py", "kernels/loop.py",
            "kernels/csvfmt.py", "csvtext.py", "kernels/reduce.py", "integrators/steps.py", "integrators/chang.py",
            "integrators/central_difference.py", "integrators/kr_alpha.py", "integrators/newmark.py",
-           "kernels/dop853.py", "kernels/dop853_layout.py")
+           "kernels/dop853.py", "kernels/dop853_layout.py", "signals.py")
 
 #: name -> (module, function, signature)
 EXPORTS = {
     "run_chunk": ("rbhyst.kernels.loop", "run_chunk",
-                  "i8(i8, f8[:,:,:,::1], f8[::1], f8[::1], f8[:,::1], b1, b1, f8[:,::1], f8[::1], f8[:,:,::1], "
+                  "i8(i8, f8[:,:,:,::1], f8[::1], f8[::1], f8[:,::1], b1, f8[:,::1], f8[::1], f8[:,:,::1], "
                   "f8[::1], f8[:,::1], f8, f8, i8, i8, f8, i8, i8, f8, i8, f8[::1], f8[:,:,::1], f8[:,::1], "
-                  "f8[:,::1], f8[:,::1], f8[:,::1], f8[:,::1], f8[:,::1], f8[:,::1], f8[:,::1], f8[::1])"),
+                  "f8[:,::1], f8[:,::1], f8[:,::1], f8[:,::1], f8[:,::1], f8[:,::1], f8[::1])"),
     "integrate": ("rbhyst.kernels.dop853", "_integrate",
-                  "i8(f8[::1], f8[:,::1], f8[::1], f8[:,:,::1], f8[:,::1], f8[::1], f8[:,:,::1], f8[::1], f8, "
-                  "f8[::1], f8[:,::1], f8[::1], f8, i8, f8[:,::1], f8[::1], f8[::1], f8[::1], f8[::1], "
-                  "f8[:,::1], f8[:,::1], f8[:,::1], f8[:,::1], f8[:,::1], f8[::1], f8[::1], f8[:,::1], "
+                  "i8(f8[::1], f8[:,::1], f8[::1], f8[:,:,::1], f8[:,::1], f8[::1], f8[:,:,::1], f8[:,::1], "
+                  "f8[::1], f8, f8[::1], f8[:,::1], f8[::1], f8, i8, f8[:,::1], f8[::1], f8[::1], f8[::1], "
+                  "f8[::1], f8[:,::1], f8[:,::1], f8[:,::1], f8[:,::1], f8[::1], f8[::1], f8[:,::1], "
                   "f8[:,::1], f8[:,::1], f8[:,::1], f8[::1], f8[::1])"),
     "decompose": ("rbhyst.kernels.csvfmt", "_decompose",
                   "i8(f8[:,::1], i8[:,::1], i8[:,::1], i1[:,::1], f8[::1])"),

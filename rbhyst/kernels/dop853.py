@@ -11,9 +11,10 @@ import math
 from numba import njit
 
 from ..hysteresis import ALPHA, EXP_ARG_MAX
-from .dop853_layout import (NERR, NP, NS, NY, R_ELEMENT, R_EVENTS, R_FEV, R_HMAX, R_HMIN, R_REJECTED,
+from .dop853_layout import (NERR, NS, NY, R_ELEMENT, R_EVENTS, R_FEV, R_HMAX, R_HMIN, R_REJECTED,
                             R_START_FLIPS, R_STATUS, R_STEPS, R_TIME, SIMULTANEOUS, ST_NONFINITE, ST_OK,
                             ST_OVERFLOW, ST_STEP_TOO_SMALL, ST_TOO_MANY_STEPS)
+from ..signals import HALF_SINE, HAVERSINE, ROW_SIZE as ROW, SAWTOOTH, SINE
 from .vrm import branch_eval, branch_row
 
 
@@ -32,21 +33,53 @@ def _force(params, e, s, up, gp, u):
 
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
-def _load(t, k, brk, pcoef, out):
+def _analytic(sig, i, t, inside):
+    """Analytic signal i of the table (rbhyst.signals row layout) at t; ``inside``: whether the
+    piece being stepped lies within the signal's span (its ends are breakpoints, so a piece is
+    inside or outside as a whole, and a jump at an end is seen from the piece's own side)."""
+    if not inside:
+        return 0.0
+    kind = int(sig[i, 0])
+    amp = sig[i, 1]
+    start = sig[i, 4]
+    if kind == SINE:
+        v = amp * math.sin(sig[i, 2] * (t - start) + sig[i, 3])
+        ramp = sig[i, 6]
+        if ramp > 0.0:
+            tau = min(max((t - start) / ramp, 0.0), 1.0)
+            v *= tau - math.sin(2.0 * math.pi * tau) / (2.0 * math.pi)
+        return v
+    tau = min(max((t - start) / sig[i, 7], 0.0), 1.0)
+    if kind == HALF_SINE:
+        return amp * math.sin(math.pi * tau)
+    if kind == HAVERSINE:
+        return amp * 0.5 * (1.0 - math.cos(2.0 * math.pi * tau))
+    if kind == SAWTOOTH:
+        return amp * tau
+    return amp * (1.0 - abs(2.0 * tau - 1.0))  # TRIANGLE
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _load(t, k, brk, pcoef, sig, out):
+    """The load at t in piece k: the records' share linear between the piece's ends (exact: their
+    samples are breakpoints), every analytic signal evaluated where it is (no fit, no table)."""
     ta = brk[k]
     tb = brk[k + 1]
-    x = (2.0 * t - ta - tb) / (tb - ta)
+    w = (t - ta) / (tb - ta)
     for c in range(3):
-        acc = pcoef[k, NP - 1, c]
-        for j in range(NP - 2, -1, -1):
-            acc = acc * x + pcoef[k, j, c]
-        out[c] = acc
+        out[c] = pcoef[k, 0, c] + w * (pcoef[k, 1, c] - pcoef[k, 0, c])
+    mid = 0.5 * (ta + tb)
+    for i in range(sig.shape[0]):
+        v = _analytic(sig, i, t, sig[i, 4] <= mid <= sig[i, 5])
+        if v != 0.0:
+            for c in range(3):
+                out[c] += sig[i, ROW + c] * v
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
-def _rhs(t, y, k, brk, pcoef, minv, bvec, mult, params, cm, s, up, gp, p, dy):
+def _rhs(t, y, k, brk, pcoef, sig, minv, bvec, mult, params, cm, s, up, gp, p, dy):
     """dy = (v, M^-1 (p - R - C v), p . v, v . C v); returns the first element that overflowed, or -1."""
-    _load(t, k, brk, pcoef, p)
+    _load(t, k, brk, pcoef, sig, p)
     r0 = 0.0
     r1 = 0.0
     r2 = 0.0
@@ -96,8 +129,8 @@ def _g_dense(F, y_old, x, bvec, e, s):
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
-def _integrate(minv, bvec, mult, params, cm, brk, pcoef, t_out, rtol, atol, init, y0, h_first, max_steps,
-               A, B, C, E3, E5, D, out_y, out_a, out_eu, out_ef, out_eh, info, el, vec, K, F, p, gs):
+def _integrate(minv, bvec, mult, params, cm, brk, pcoef, sig, t_out, rtol, atol, init, y0, h_first, max_steps,
+               A, B, C, E3, E5, D, out_y, out_eu, out_ef, out_eh, info, el, vec, K, F, p, gs):
     """The whole integration; el (6, ne), vec (7, NY), K (16, NY), F (7, NY), p (3,), gs (NS + 1,)
     are its work space (allocated by the caller: no reference counting in here)."""
     ne = bvec.shape[0]
@@ -148,7 +181,7 @@ def _integrate(minv, bvec, mult, params, cm, brk, pcoef, t_out, rtol, atol, init
 
     for k in range(n_int):
         tb = brk[k + 1]
-        bad = _rhs(t, y, k, brk, pcoef, minv, bvec, mult, params, cm, s, up, gp, p, f)
+        bad = _rhs(t, y, k, brk, pcoef, sig, minv, bvec, mult, params, cm, s, up, gp, p, f)
         n_fev += 1
         if bad >= 0:
             info[R_STATUS] = ST_OVERFLOW
@@ -160,8 +193,7 @@ def _integrate(minv, bvec, mult, params, cm, brk, pcoef, t_out, rtol, atol, init
             while io < n_out and t_out[io] <= t:
                 for i in range(NY):
                     yo[i] = y[i]
-                io = _write(io, t, k, yo, brk, pcoef, minv, bvec, mult, params, cm, s, up, gp, ap, wacc,
-                            p, out_y, out_a, out_eu, out_ef, out_eh)
+                io = _write(io, yo, bvec, mult, params, s, up, gp, ap, wacc, out_y, out_eu, out_ef, out_eh)
         while tb - t > 1e-13 * max(1.0, abs(tb)):
             if n_steps + n_rej > max_steps:
                 info[R_STATUS] = ST_TOO_MANY_STEPS
@@ -177,7 +209,7 @@ def _integrate(minv, bvec, mult, params, cm, brk, pcoef, t_out, rtol, atol, init
             # ---- one DOP853 step
             for i in range(NY):
                 K[0, i] = f[i]
-            bad = _stages(1, 12, t, hh, y, k, brk, pcoef, minv, bvec, mult, params, cm, s, up, gp, p, A, C, K, ytmp)
+            bad = _stages(1, 12, t, hh, y, k, brk, pcoef, sig, minv, bvec, mult, params, cm, s, up, gp, p, A, C, K, ytmp)
             n_fev += 11
             if bad < 0:
                 for i in range(NY):
@@ -185,7 +217,7 @@ def _integrate(minv, bvec, mult, params, cm, brk, pcoef, t_out, rtol, atol, init
                     for j in range(12):
                         acc += B[j] * K[j, i]
                     y_new[i] = y[i] + hh * acc
-                bad = _rhs(t + hh, y_new, k, brk, pcoef, minv, bvec, mult, params, cm, s, up, gp, p, f_new)
+                bad = _rhs(t + hh, y_new, k, brk, pcoef, sig, minv, bvec, mult, params, cm, s, up, gp, p, f_new)
                 n_fev += 1
             if bad >= 0:
                 # an exponential overflowed inside the step: try a smaller one first
@@ -255,7 +287,7 @@ def _integrate(minv, bvec, mult, params, cm, brk, pcoef, t_out, rtol, atol, init
             ev = -1
             x_ev = 2.0
             if need:
-                _dense_coefficients(t, hh, y, y_new, f, f_new, k, brk, pcoef, minv, bvec, mult, params,
+                _dense_coefficients(t, hh, y, y_new, f, f_new, k, brk, pcoef, sig, minv, bvec, mult, params,
                                     cm, s, up, gp, p, A, C, D, K, F, ytmp)
                 n_fev += 3
                 have_dense = True
@@ -322,7 +354,7 @@ def _integrate(minv, bvec, mult, params, cm, brk, pcoef, t_out, rtol, atol, init
                     if xroot[e] == 0.0:
                         _new_branch(e, y, bvec, params, s, up, gp, ap, wacc)
                         n_start += 1
-                bad = _rhs(t, y, k, brk, pcoef, minv, bvec, mult, params, cm, s, up, gp, p, f)
+                bad = _rhs(t, y, k, brk, pcoef, sig, minv, bvec, mult, params, cm, s, up, gp, p, f)
                 n_fev += 1
                 if n_start > 100 * (n_ev + n_steps + 10):
                     info[R_STATUS] = ST_STEP_TOO_SMALL
@@ -336,12 +368,11 @@ def _integrate(minv, bvec, mult, params, cm, brk, pcoef, t_out, rtol, atol, init
                     x = (t_out[io] - t) / hh
                     for i in range(NY):
                         yo[i] = _dense(F, y, x, i)
-                    io = _write(io, t_out[io], k, yo, brk, pcoef, minv, bvec, mult, params, cm, s, up, gp, ap,
-                                wacc, p, out_y, out_a, out_eu, out_ef, out_eh)
+                    io = _write(io, yo, bvec, mult, params, s, up, gp, ap, wacc, out_y, out_eu, out_ef, out_eh)
                 # redo the step to the reversal exactly
                 h_ev = t_ev - t
                 if h_ev > 0.0:
-                    _stages(1, 12, t, h_ev, y, k, brk, pcoef, minv, bvec, mult, params, cm, s, up, gp, p, A, C, K, ytmp)
+                    _stages(1, 12, t, h_ev, y, k, brk, pcoef, sig, minv, bvec, mult, params, cm, s, up, gp, p, A, C, K, ytmp)
                     n_fev += 11
                     for i in range(NY):
                         acc = 0.0
@@ -355,8 +386,7 @@ def _integrate(minv, bvec, mult, params, cm, brk, pcoef, t_out, rtol, atol, init
                 for i in range(NY):
                     y[i] = y_ev[i]
                 while io < n_out and t_out[io] <= t:
-                    io = _write(io, t_out[io], k, y, brk, pcoef, minv, bvec, mult, params, cm, s, up, gp, ap, wacc,
-                                p, out_y, out_a, out_eu, out_ef, out_eh)
+                    io = _write(io, y, bvec, mult, params, s, up, gp, ap, wacc, out_y, out_eu, out_ef, out_eh)
                 # elements that reverse together (identical b and sets, or by chance within
                 # SIMULTANEOUS of the step) all start their new branches here
                 for e in range(ne):
@@ -364,7 +394,7 @@ def _integrate(minv, bvec, mult, params, cm, brk, pcoef, t_out, rtol, atol, init
                         _new_branch(e, y, bvec, params, s, up, gp, ap, wacc)
                         n_ev += 1
                 n_steps += 1
-                bad = _rhs(t, y, k, brk, pcoef, minv, bvec, mult, params, cm, s, up, gp, p, f)
+                bad = _rhs(t, y, k, brk, pcoef, sig, minv, bvec, mult, params, cm, s, up, gp, p, f)
                 n_fev += 1
                 if h_ev > 0.0:
                     h_min_seen = min(h_min_seen, h_ev)
@@ -372,15 +402,14 @@ def _integrate(minv, bvec, mult, params, cm, brk, pcoef, t_out, rtol, atol, init
             # ---- accept the whole step
             while io < n_out and t_out[io] < t + hh:
                 if not have_dense:
-                    _dense_coefficients(t, hh, y, y_new, f, f_new, k, brk, pcoef, minv, bvec, mult, params,
+                    _dense_coefficients(t, hh, y, y_new, f, f_new, k, brk, pcoef, sig, minv, bvec, mult, params,
                                         cm, s, up, gp, p, A, C, D, K, F, ytmp)
                     n_fev += 3
                     have_dense = True
                 x = (t_out[io] - t) / hh
                 for i in range(NY):
                     yo[i] = _dense(F, y, x, i)
-                io = _write(io, t_out[io], k, yo, brk, pcoef, minv, bvec, mult, params, cm, s, up, gp, ap, wacc,
-                            p, out_y, out_a, out_eu, out_ef, out_eh)
+                io = _write(io, yo, bvec, mult, params, s, up, gp, ap, wacc, out_y, out_eu, out_ef, out_eh)
             clipped = hh < h
             t = tb if hh == tb - t else t + hh
             for i in range(NY):
@@ -391,16 +420,14 @@ def _integrate(minv, bvec, mult, params, cm, brk, pcoef, t_out, rtol, atol, init
             h_max_seen = max(h_max_seen, hh)
             h = max(h, hh * factor) if clipped else hh * factor
             while io < n_out and t_out[io] <= t:
-                io = _write(io, t_out[io], k, y, brk, pcoef, minv, bvec, mult, params, cm, s, up, gp, ap, wacc,
-                            p, out_y, out_a, out_eu, out_ef, out_eh)
+                io = _write(io, y, bvec, mult, params, s, up, gp, ap, wacc, out_y, out_eu, out_ef, out_eh)
             if not (math.isfinite(y[0]) and math.isfinite(y[1]) and math.isfinite(y[2])):
                 info[R_STATUS] = ST_NONFINITE
                 info[R_TIME] = t
                 return io
     # outputs left by round-off at the very end
     while io < n_out:
-        io = _write(io, t_out[io], n_int - 1, y, brk, pcoef, minv, bvec, mult, params, cm, s, up, gp, ap, wacc,
-                    p, out_y, out_a, out_eu, out_ef, out_eh)
+        io = _write(io, y, bvec, mult, params, s, up, gp, ap, wacc, out_y, out_eu, out_ef, out_eh)
     info[R_STATUS] = ST_OK
     info[R_STEPS] = n_steps
     info[R_REJECTED] = n_rej
@@ -413,7 +440,7 @@ def _integrate(minv, bvec, mult, params, cm, brk, pcoef, t_out, rtol, atol, init
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
-def _stages(first, last, t, hh, y, k, brk, pcoef, minv, bvec, mult, params, cm, s, up, gp, p, A, C, K, ytmp):
+def _stages(first, last, t, hh, y, k, brk, pcoef, sig, minv, bvec, mult, params, cm, s, up, gp, p, A, C, K, ytmp):
     """Runge-Kutta stages first..last-1 of a step hh from (t, y) into the rows of K;
     returns the first element whose exponential overflowed, or -1."""
     for st in range(first, last):
@@ -422,17 +449,17 @@ def _stages(first, last, t, hh, y, k, brk, pcoef, minv, bvec, mult, params, cm, 
             for j in range(st):
                 acc += A[st, j] * K[j, i]
             ytmp[i] = y[i] + hh * acc
-        bad = _rhs(t + C[st] * hh, ytmp, k, brk, pcoef, minv, bvec, mult, params, cm, s, up, gp, p, K[st])
+        bad = _rhs(t + C[st] * hh, ytmp, k, brk, pcoef, sig, minv, bvec, mult, params, cm, s, up, gp, p, K[st])
         if bad >= 0:
             return bad
     return -1
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
-def _dense_coefficients(t, hh, y, y_new, f, f_new, k, brk, pcoef, minv, bvec, mult, params, cm, s, up, gp, p,
+def _dense_coefficients(t, hh, y, y_new, f, f_new, k, brk, pcoef, sig, minv, bvec, mult, params, cm, s, up, gp, p,
                         A, C, D, K, F, ytmp):
     """The three extra stages and the 7 rows of DOP853's dense output (as scipy's DOP853)."""
-    _stages(13, 16, t, hh, y, k, brk, pcoef, minv, bvec, mult, params, cm, s, up, gp, p, A, C, K, ytmp)
+    _stages(13, 16, t, hh, y, k, brk, pcoef, sig, minv, bvec, mult, params, cm, s, up, gp, p, A, C, K, ytmp)
     for i in range(NY):
         dy = y_new[i] - y[i]
         F[0, i] = dy
@@ -461,13 +488,9 @@ def _new_branch(e, y, bvec, params, s, up, gp, ap, wacc):
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
-def _write(io, t, k, y, brk, pcoef, minv, bvec, mult, params, cm, s, up, gp, ap, wacc, p,
-           out_y, out_a, out_eu, out_ef, out_eh):
-    """One output row at time t from the state y on the current branches."""
-    _load(t, k, brk, pcoef, p)
-    r0 = 0.0
-    r1 = 0.0
-    r2 = 0.0
+def _write(io, y, bvec, mult, params, s, up, gp, ap, wacc, out_y, out_eu, out_ef, out_eh):
+    """One output row from the state y on the current branches: the state, each element row's
+    deformation and force, the hysteretic work."""
     eh = 0.0
     for e in range(bvec.shape[0]):
         u = bvec[e, 0] * y[0] + bvec[e, 1] * y[1] + bvec[e, 2] * y[2]
@@ -477,13 +500,7 @@ def _write(io, t, k, y, brk, pcoef, minv, bvec, mult, params, cm, s, up, gp, ap,
         out_eu[io, e] = u
         out_ef[io, e] = fe
         eh += mult[e] * w
-        r0 += mult[e] * fe * bvec[e, 0]
-        r1 += mult[e] * fe * bvec[e, 1]
-        r2 += mult[e] * fe * bvec[e, 2]
     for i in range(NY):
         out_y[io, i] = y[i]
-    out_a[io, 0] = minv[0] * (p[0] - r0 - (cm[0, 0] * y[3] + cm[0, 1] * y[4] + cm[0, 2] * y[5]))
-    out_a[io, 1] = minv[1] * (p[1] - r1 - (cm[1, 0] * y[3] + cm[1, 1] * y[4] + cm[1, 2] * y[5]))
-    out_a[io, 2] = minv[2] * (p[2] - r2 - (cm[2, 0] * y[3] + cm[2, 1] * y[4] + cm[2, 2] * y[5]))
     out_eh[io] = eh
     return io + 1

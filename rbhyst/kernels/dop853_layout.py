@@ -1,7 +1,6 @@
 """Layout shared by the adaptive integration's compiled kernel (rbhyst.kernels.dop853) and its
 driver (rbhyst.integrators.reference): state vector, samples, info slots. No compiled code."""
 
-NP = 8  # load polynomial: degree NP - 1 on each piece
 NS = 8  # samples of b . v per step when looking for a crossing
 SIMULTANEOUS = 1e-9  # reversals this close (fraction of the step) are one event
 NY = 8  # q (3), v (3), input energy, viscous work

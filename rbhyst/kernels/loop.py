@@ -29,9 +29,9 @@ def _fail(info, status, element, t):
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
-def run_chunk(method, coef, mass, minv, cm, damped, own_acc, bvec, mult, params, wgt,
+def run_chunk(method, coef, mass, minv, cm, damped, bvec, mult, params, wgt,
               load, t0, h_c, nsub_c, n_steps, omega_dt_limit, min_level, max_level, newton_tol, newton_max_iter,
-              x, st, st_save, kpeak, out_d, out_v, out_a, out_u, out_f, out_e, info):
+              x, st, st_save, kpeak, out_d, out_v, out_u, out_f, out_e, info):
     """Advance the state x, st over n_steps output steps of nsub_c compute steps of h_c each.
 
     load: (n_steps * nsub_c + 1, 3) generalized load on the compute grid from the chunk's
@@ -40,8 +40,9 @@ def run_chunk(method, coef, mass, minv, cm, damped, own_acc, bvec, mult, params,
     Every compute step is split into at least 2**min_level substeps (a structure-dependent
     method needs omega_0 h within the limit too, see simulate.min_level). A step whose Newton
     iterations fail is retried, like a stiff one, with twice the substeps.
-    ``own_acc``: the method's acceleration variable is its own (KR-alpha); rows then report
-    equilibrium M^-1 (p - R - C v) instead.
+    Rows hold no acceleration: the caller takes it from the equation of motion at the row's
+    state and time (rbhyst.history.Layout), never from a method's own variable (KR-alpha's
+    is a(t) + O(h); any method's carries the load averaged over a step near a jump).
     Returns the number of rows written; info tells how it ended.
     """
     ne = bvec.shape[0]
@@ -64,22 +65,12 @@ def run_chunk(method, coef, mass, minv, cm, damped, own_acc, bvec, mult, params,
     omega_dt2_seen = x[X_OMEGA_DT2]
     level = int(x[X_LEVEL])
     cur = int(x[X_CUR])
-    # restoring force of the current state (KR-alpha's reported acceleration needs it)
-    r0 = 0.0
-    r1 = 0.0
-    r2 = 0.0
-    for e in range(ne):
-        mf = mult[e] * st[cur, e, F]
-        r0 += mf * bvec[e, 0]
-        r1 += mf * bvec[e, 1]
-        r2 += mf * bvec[e, 2]
     limit2 = omega_dt_limit * omega_dt_limit
     info[I_STATUS] = OK
     row = 0
     for j in range(n_steps * nsub_c):
         # the state to restart this compute step from if a substep is rejected
         sd0, sd1, sd2, sv0, sv1, sv2, sa0, sa1, sa2 = d0, d1, d2, v0, v1, v2, a0, a1, a2
-        sr0, sr1, sr2 = r0, r1, r2
         s_in, s_hyst, s_visc, s_cur = e_in, e_hyst, e_visc, cur
         saved = False
         level = max(level - 1, min_level)
@@ -95,7 +86,7 @@ def run_chunk(method, coef, mass, minv, cm, damped, own_acc, bvec, mult, params,
                 # load at the ends of the substep, linear within the compute step
                 w0 = k * inv_nsub
                 w1 = (k + 1) * inv_nsub
-                ok, bad, work, its, n0, n1, n2, nv0, nv1, nv2, na0, na1, na2, r0, r1, r2 = take_step(
+                ok, bad, work, its, n0, n1, n2, nv0, nv1, nv2, na0, na1, na2, _, _, _ = take_step(
                     method, coef, level, mass, minv, cm, damped, bvec, mult, params, st, cur,
                     d0, d1, d2, v0, v1, v2, a0, a1, a2, load, j, w0, w1, h, kpeak,
                     newton_tol, newton_max_iter)
@@ -147,7 +138,6 @@ def run_chunk(method, coef, mass, minv, cm, damped, own_acc, bvec, mult, params,
                 break
             # restart the compute step with twice as many substeps
             d0, d1, d2, v0, v1, v2, a0, a1, a2 = sd0, sd1, sd2, sv0, sv1, sv2, sa0, sa1, sa2
-            r0, r1, r2 = sr0, sr1, sr2
             e_in, e_hyst, e_visc = s_in, s_hyst, s_visc
             cur = s_cur
             if saved:
@@ -166,22 +156,6 @@ def run_chunk(method, coef, mass, minv, cm, damped, own_acc, bvec, mult, params,
             out_v[row, 0] = v0
             out_v[row, 1] = v1
             out_v[row, 2] = v2
-            if own_acc:
-                # the method's acceleration is a(t) + O(h): report equilibrium at d instead
-                q0 = load[j + 1, 0] - r0
-                q1 = load[j + 1, 1] - r1
-                q2 = load[j + 1, 2] - r2
-                if damped:
-                    q0 -= cm[0, 0] * v0 + cm[0, 1] * v1 + cm[0, 2] * v2
-                    q1 -= cm[1, 0] * v0 + cm[1, 1] * v1 + cm[1, 2] * v2
-                    q2 -= cm[2, 0] * v0 + cm[2, 1] * v1 + cm[2, 2] * v2
-                out_a[row, 0] = minv[0] * q0
-                out_a[row, 1] = minv[1] * q1
-                out_a[row, 2] = minv[2] * q2
-            else:
-                out_a[row, 0] = a0
-                out_a[row, 1] = a1
-                out_a[row, 2] = a2
             for e in range(ne):
                 out_u[row, e] = st[cur, e, U]
                 out_f[row, e] = st[cur, e, F]

@@ -43,6 +43,14 @@ class LocatedSpectra:
     def sd(self, location: str, direction: str) -> np.ndarray:
         return self.spectrum.sd[:, :, self.index(location, direction)]
 
+    def joined(self, other: "LocatedSpectra") -> "LocatedSpectra":
+        """These signals followed by ``other``'s (same periods and dampings); the samples and dt
+        are ``other``'s (a run's ground spectra joined by its body's, which count its rows)."""
+        a, b = self.spectrum, other.spectrum
+        spectrum = Spectrum(periods=b.periods, dampings=b.dampings, dt=b.dt, samples=b.samples,
+                            sd=np.concatenate([a.sd, b.sd], axis=2), sa=np.concatenate([a.sa, b.sa], axis=2))
+        return LocatedSpectra(self.signals + other.signals, spectrum)
+
     def table(self) -> tuple[list[tuple[str, str]], np.ndarray]:
         """The rows of spectra.csv: (location, direction) of each and its numbers (damping,
         period_s, frequency_hz, sa_m_s2, psa_m_s2, sd_m)."""
@@ -80,8 +88,9 @@ class SpectraSink:
         self.signals = tuple(signals)
         self._acc = SpectrumAccumulator(periods, dampings, len(self.signals), dt)
 
-    def update(self, chunk: np.ndarray) -> None:
-        self._acc.update(chunk)
+    def update(self, chunk: np.ndarray, h: float | None = None) -> None:
+        """The next rows, ``h`` apart (default the sink's dt)."""
+        self._acc.update(chunk, h)
 
     def result(self) -> LocatedSpectra:
         return LocatedSpectra(self.signals, self._acc.result())

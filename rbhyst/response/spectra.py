@@ -18,19 +18,22 @@ truncation error, only rounding. What is reported is the largest |x| (``sd``) an
 largest |x'' + a| (``sa``, the maximax shock or in-structure spectrum) over the points at
 which the response is evaluated, and ``psa`` = omega^2 sd.
 
-**Short periods.** The recurrence is exact at any step, but a maximum taken over points
-T / 2 or more apart can miss the peak altogether. Every oscillator is therefore evaluated
-at least ``points_per_period`` times per period: where T < points_per_period x dt, each
-step is split into m = ceil(points_per_period dt / T) equal substeps (the input is linear
-within the step, so the substeps are exact too) and the maxima are taken over them as
-well. A peak then lies within half a point spacing, a phase of pi / points_per_period, of
-a point: a sinusoidal response's peak is underestimated by less than
-1 - cos(pi / points_per_period), 1.2 % at the default 20. Below that period the cost of an
-oscillator grows as dt / T. ``points_per_period=0`` takes the maxima over the record's
-samples only, as most codes do. The substeps resolve the response to the piecewise-linear
-input; they do not restore the content above the record's Nyquist frequency that linear
-interpolation leaves out (for that, resample the record with a band-limited interpolation
-first; Boore, D. M. and Goulet, C. A., 2014, Bull. Earthquake Eng. 12, 203-216).
+**Peaks between points.** The recurrence is exact at any step, but a maximum taken over
+points T / 2 or more apart can miss the peak altogether. Every oscillator is therefore
+evaluated at least ``points_per_period`` times per period: where T < points_per_period x dt,
+each step is split into m = ceil(points_per_period dt / T) equal substeps (the input is linear
+within the step, so the substeps are exact too). Between two points x and the absolute
+acceleration are smooth, and their values and slopes at both are known exactly; where a slope
+changes sign the peak is taken on the cubic through them (Hermite interpolation): a sinusoidal
+response evaluated 20 times a period peaks within 3e-5 of its amplitude (the points alone can
+miss it by 1 - cos(pi / 20) = 1.2 %), and under white noise at the sampling rate the peaks of a
+period of 20 dt are within 2e-3 of the continuous response's (the points alone: 19 %, measured
+in tests/test_spectra.py). Below T = points_per_period x dt the cost of an oscillator grows as
+dt / T. ``points_per_period=0`` takes the maxima over the record's samples only, as most codes
+do. The substeps resolve the response to the piecewise-linear input; they do not restore the
+content above the record's Nyquist frequency that linear interpolation leaves out (for that,
+resample the record with a band-limited interpolation first; Boore, D. M. and Goulet, C. A.,
+2014, Bull. Earthquake Eng. 12, 203-216).
 
 Units: acceleration in m/s^2 gives sd in m and sa, psa in m/s^2 (everything is linear in
 the input, so any consistent unit works).
@@ -52,8 +55,8 @@ _SERIES_BELOW = 1.0
 _SERIES_TERMS = 32  # |M| <= 3 for omega h <= 1: the 32nd term is below 1e-18
 
 # coefficient columns: x+ = A11 x + A12 v + B11 a + B12 a+, v+ = A21 x + A22 v + B21 a + B22 a+;
-# then 2 zeta omega and omega^2 for the absolute acceleration
-_N_COEF = 10
+# then 2 zeta omega and omega^2 for the absolute acceleration, and the substep
+_N_COEF = 11
 
 
 def default_periods(n: int = 100, t_min: float = 0.01, t_max: float = 10.0) -> np.ndarray:
@@ -172,6 +175,7 @@ class SpectrumAccumulator:
     """
 
     def __init__(self, periods, dampings, n_signals: int, dt: float, points_per_period: int = 20):
+        """``dt``: the step between samples (a chunk may say another, see :meth:`update`)."""
         self.periods, self.dampings = _checked_oscillators(periods, dampings)
         problems = []
         if not (isinstance(dt, (int, float, np.floating, np.integer)) and math.isfinite(dt) and dt > 0):
@@ -185,30 +189,42 @@ class SpectrumAccumulator:
         self.dt = float(dt)
         self.n_signals = int(n_signals)
         self.points_per_period = int(points_per_period)
-        # oscillator o = period j, damping k at o = j * n_dampings + k, stored in the order
-        # of their substep counts so that each count is one contiguous group for the kernel
+        # oscillator o = period j, damping k at o = j * n_dampings + k, stored by period from the
+        # longest: whatever the step, substep counts then never decrease along them, and each
+        # count is one contiguous group for the kernel
         omega = np.repeat(2.0 * np.pi / self.periods, len(self.dampings))
         zeta = np.tile(self.dampings, len(self.periods))
-        m = np.repeat(substep_counts(self.periods, self.dt, self.points_per_period), len(self.dampings))
-        self._order = np.argsort(m, kind="stable")
-        omega, zeta, m = omega[self._order], zeta[self._order], m[self._order]
-        edges = np.flatnonzero(np.diff(m)) + 1
-        first = np.concatenate([[0], edges])
-        end = np.concatenate([edges, [len(m)]])
-        self._groups = np.ascontiguousarray(np.stack([first, end, m[first]], axis=1), dtype=np.int64)
-        self._coef = np.empty((_N_COEF, len(m)))
-        self._coef[:8] = step_coefficients(omega, zeta, self.dt / m).T
-        self._coef[8] = 2.0 * zeta * omega
-        self._coef[9] = omega * omega
-        self._x = np.zeros((self.n_signals, len(m)))
-        self._v = np.zeros((self.n_signals, len(m)))
-        self._sd = np.zeros((self.n_signals, len(m)))
-        self._sa = np.zeros((self.n_signals, len(m)))
+        period = np.repeat(self.periods, len(self.dampings))
+        self._order = np.argsort(-period, kind="stable")
+        self._period, self._omega, self._zeta = period[self._order], omega[self._order], zeta[self._order]
+        self._steps: dict[float, tuple[np.ndarray, np.ndarray]] = {}
+        n = len(self._omega)
+        self._x = np.zeros((self.n_signals, n))
+        self._v = np.zeros((self.n_signals, n))
+        self._sd = np.zeros((self.n_signals, n))
+        self._sa = np.zeros((self.n_signals, n))
         self._last = np.zeros(self.n_signals)
         self.samples = 0
 
-    def update(self, chunk) -> None:
-        """Advance every oscillator over the next samples (SI: m/s^2)."""
+    def _step(self, h: float) -> tuple[np.ndarray, np.ndarray]:
+        """(coefficients, groups) of every oscillator for samples h apart, computed once per h."""
+        if h not in self._steps:
+            m = substep_counts(self._period, h, self.points_per_period)
+            edges = np.flatnonzero(np.diff(m)) + 1
+            first = np.concatenate([[0], edges])
+            end = np.concatenate([edges, [len(m)]])
+            groups = np.ascontiguousarray(np.stack([first, end, m[first]], axis=1), dtype=np.int64)
+            coef = np.empty((_N_COEF, len(m)))
+            coef[:8] = step_coefficients(self._omega, self._zeta, h / m).T
+            coef[8] = 2.0 * self._zeta * self._omega
+            coef[9] = self._omega * self._omega
+            coef[10] = h / m if self.points_per_period > 0 else 0.0  # 0: the points alone
+            self._steps[h] = (coef, groups)
+        return self._steps[h]
+
+    def update(self, chunk, h: float | None = None) -> None:
+        """Advance every oscillator over the next samples (SI: m/s^2), ``h`` apart (default the
+        accumulator's dt; the first sample of a chunk follows the last one before it by ``h``)."""
         a = np.asarray(chunk, dtype=float)
         if a.ndim == 1 and self.n_signals == 1:
             a = a[:, None]
@@ -228,9 +244,19 @@ class SpectrumAccumulator:
             start = 1  # the first sample starts the motion from rest: nothing to step over
         else:
             start = 0
-        _advance(a, start, self._last, self._coef, self._groups, self._x, self._v, self._sd, self._sa)
+        coef, groups = self._step(self.dt if h is None else float(h))
+        _advance(a, start, self._last, coef, groups, self._x, self._v, self._sd, self._sa)
         self._last[:] = a[-1]
         self.samples += a.shape[0]
+
+    def jump(self, values) -> None:
+        """The input jumps to ``values`` (one per signal) at the time of the last sample: the
+        oscillators' motion is continuous there (x'' + a = -(2 zeta omega x' + omega^2 x) does
+        not jump), so nothing is stepped; the next samples continue from the new value."""
+        values = np.broadcast_to(np.asarray(values, dtype=float), (self.n_signals,))
+        if self.samples == 0:
+            raise InputError("acceleration: a jump needs a sample before it")
+        self._last[:] = values
 
     def reset_peaks(self) -> None:
         """Start the peaks afresh from here, the oscillators keeping their motion: the
@@ -286,15 +312,43 @@ def _checked_oscillators(periods, dampings) -> tuple[np.ndarray, np.ndarray]:
     return t.copy(), z.copy()
 
 
+@njit(cache=True, error_model="numpy", inline="always")
+def _turning_value(f0, f1, d0, d1, h):
+    """The value at its turning point of the cubic with values f0, f1 and slopes d0, d1 at the
+    ends of a step h (the Hermite interpolant), where the slopes have opposite signs; else (or
+    for h = 0: the points alone) f1."""
+    if d0 * d1 >= 0.0 or h == 0.0:
+        return f1
+    # p(s) = f0 + s h d0 + s^2 c2 + s^3 c3 on s in [0, 1]; p'(s) = h d0 + 2 c2 s + 3 c3 s^2 changes
+    # sign in (0, 1): exactly one root there, found without cancellation
+    c2 = 3.0 * (f1 - f0) - h * (2.0 * d0 + d1)
+    c3 = 2.0 * (f0 - f1) + h * (d0 + d1)
+    b = 2.0 * c2
+    c = h * d0
+    a = 3.0 * c3
+    disc = max(b * b - 4.0 * a * c, 0.0)
+    q = -0.5 * (b + math.copysign(math.sqrt(disc), b))
+    s = c / q if q != 0.0 else 0.5
+    if not 0.0 <= s <= 1.0 and a != 0.0:
+        s = q / a
+    s = min(max(s, 0.0), 1.0)
+    return f0 + s * (h * d0 + s * (c2 + s * c3))
+
+
 @njit(cache=True, error_model="numpy")
 def _advance(acc, start, last, coef, groups, x, v, sd, sa):
     """Step every oscillator (column of coef) for every signal (column of acc) over acc[start:].
 
     last[s]: the sample before acc[start] of signal s; x, v, sd, sa: (signals, oscillators)
     state and running peaks, updated in place. groups[g] = (first, end, m): oscillators
-    first..end-1 take m substeps per step, the input interpolated linearly inside the step
-    with the same arithmetic whatever the chunking. The innermost loop runs over the
-    oscillators of a group, which do not depend on each other: it vectorises.
+    first..end-1 take m substeps per step, the input interpolated linearly inside the step with
+    the same arithmetic whatever the chunking. Between two evaluation points x and the absolute
+    acceleration are smooth and their values and slopes at both points are known exactly (the
+    slope of x'' + a = -(2 zeta omega x' + omega^2 x) from the equation itself): where a slope
+    changes sign, the peak is taken on the cubic through them (Hermite), so a peak between the
+    points is found to O(h^4): a sinusoid evaluated 20 times a period peaks within 3e-5 of its
+    amplitude, where the points alone can miss it by 1.2 %. The innermost loop runs over the
+    oscillators of a group, which do not depend on each other.
     """
     n = acc.shape[0]
     for g in range(groups.shape[0]):
@@ -312,6 +366,7 @@ def _advance(acc, start, last, coef, groups, x, v, sd, sa):
         b22 = coef[7, lo:hi]
         cv = coef[8, lo:hi]
         cx = coef[9, lo:hi]
+        hs = coef[10, lo:hi]
         for s in range(acc.shape[1]):
             xs = x[s, lo:hi]
             vs = v[s, lo:hi]
@@ -329,9 +384,14 @@ def _advance(acc, start, last, coef, groups, x, v, sd, sa):
                         vo = vs[o]
                         xn = (a11[o] * xo + a12[o] * vo) + (b11[o] * p0 + b12[o] * p1)
                         vn = (a21[o] * xo + a22[o] * vo) + (b21[o] * p0 + b22[o] * p1)
+                        yo = cv[o] * vo + cx[o] * xo
+                        yn = cv[o] * vn + cx[o] * xn
+                        # x'' = -(a + y): the slopes of y = 2 zeta omega x' + omega^2 x at both ends
+                        go = cx[o] * vo - cv[o] * (p0 + yo)
+                        gn = cx[o] * vn - cv[o] * (p1 + yn)
                         xs[o] = xn
                         vs[o] = vn
-                        ds[o] = max(ds[o], abs(xn))
-                        fs[o] = max(fs[o], abs(cv[o] * vn + cx[o] * xn))
+                        ds[o] = max(ds[o], abs(_turning_value(xo, xn, vo, vn, hs[o])), abs(xn))
+                        fs[o] = max(fs[o], abs(_turning_value(yo, yn, go, gn, hs[o])), abs(yn))
                     p0 = p1
                 a0 = a1
