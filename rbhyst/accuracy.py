@@ -53,6 +53,8 @@ AT_REST = 1e-9
 #: the spectra's error is estimated on runs of at most this many compute steps (the reference
 #: is then computed at each of them, as the run's spectra were driven)
 SPECTRA_ROWS = 500_000
+#: a warning names at most this many quantities beside the worst (then "and k more")
+WARN_NAMES = 8
 
 
 def relative_errors(d: np.ndarray, d_ref: np.ndarray, system: System) -> tuple[float, float, float]:
@@ -298,7 +300,12 @@ def warnings_for(accuracy: dict, settings, stats=None) -> list[str]:
             hint = f"; dt = {dt:.3g} s, --integrator adaptive, or --tolerance {settings.warn_error:g} would do"
         else:
             hint = f"; --tolerance {settings.warn_error:g} would do"
-        out.append(f"estimated error {worst:.2%} in {name} exceeds analysis.warn_error = {settings.warn_error:.0%}{hint}")
+        over = sorted(((v, k) for k, v in err.items() if v > settings.warn_error and k != name), reverse=True)
+        also = ", ".join(f"{k} {v:.2%}" for v, k in over[:WARN_NAMES])
+        also += f" and {len(over) - WARN_NAMES} more" if len(over) > WARN_NAMES else ""
+        also = f" (also {also})" if also else ""
+        out.append(f"estimated error {worst:.2%} in {name}{also} exceeds analysis.warn_error = "
+                   f"{settings.warn_error:.0%}{hint}")
     return out
 
 
