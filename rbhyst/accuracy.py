@@ -293,8 +293,8 @@ def warnings_for(accuracy: dict, settings, stats=None) -> list[str]:
     elif worst > settings.warn_error:
         hint = ""
         if settings.integrator != "adaptive":
-            step = settings.dt
-            if stats is not None and stats.substeps:
+            step = settings.dt  # the compute step the error belongs to, where the run split dt
+            if stats is not None:
                 step = settings.dt / stats.record_substeps / 2**stats.max_substep_level
             dt = step * 0.7 * (settings.warn_error / worst) ** 0.5
             hint = f"; dt = {dt:.3g} s, --integrator adaptive, or --tolerance {settings.warn_error:g} would do"

@@ -12,7 +12,7 @@ from __future__ import annotations
 import dataclasses
 from pathlib import Path
 
-from .deck import Deck, load_deck
+from .deck import ANALYSIS_SECTIONS, Deck, load_deck
 from .errors import InputError
 from .results import Result, write_summary
 
@@ -20,12 +20,12 @@ __all__ = ["load_deck", "run", "write"]
 
 
 def _deck(deck: Deck | str | Path) -> Deck:
-    return deck if isinstance(deck, Deck) else load_deck(deck)
+    return deck if isinstance(deck, Deck) else load_deck(deck, need=ANALYSIS_SECTIONS)
 
 
 def run(deck: Deck | str | Path, integrator: str | None = None, dt: float | None = None,
         out: str | Path | None = None, plots: bool | None = None, tolerance: float | None = None,
-        estimate: bool | None = None, keep: bool = True) -> Result:
+        estimate: bool | None = None, keep: bool = True, monitor=None) -> Result:
     """Run a deck (a Deck or a path) and return its Result, with its error estimated.
 
     Without ``out`` the rows stay in memory (``Result.table``, ``to_pandas``). With ``out``
@@ -34,7 +34,9 @@ def run(deck: Deck | str | Path, integrator: str | None = None, dt: float | None
     the way to run what does not fit. ``tolerance``: the accuracy asked for (rbhyst chooses
     how, see README "Accuracy"); ``estimate``: whether to estimate the error (default: the
     deck's analysis.estimate_error, true); ``keep=False`` without ``out``: keep only the
-    reductions (peaks, extremes, accuracy), as a sweep does.
+    reductions (peaks, extremes, accuracy), as a sweep does. ``monitor``: an object with
+    ``note(text)`` (what to say before the run starts, such as the size of a large CSV) and
+    ``update(done, total, label)`` (how far it is), for a caller that shows them as it goes.
     """
     from .model import assemble
     from .settings import settings_from_deck
@@ -44,14 +46,21 @@ def run(deck: Deck | str | Path, integrator: str | None = None, dt: float | None
     if estimate is not None:
         settings = dataclasses.replace(settings, estimate=estimate)
     system = assemble(d, d.base)
+    progress = None if monitor is None else monitor.update
     if out is None:
-        return _solve(system, settings, keep=keep)
+        return _solve(system, settings, keep=keep, progress=progress)
     from .outdir import staged_directory
 
     plan = _plan(system, settings)  # what can fail before a file is touched
-    plan.check_size(keep=False, folder=Path(out))
+    early = plan.check_size(keep=False, folder=Path(out))
+    for note in early if monitor is not None else ():
+        monitor.note(note)
     with staged_directory(Path(out)) as tmp:
-        result = _solve(system, settings, keep=False, csv_path=tmp / "time_history.csv", plan=plan)
+        result = _solve(system, settings, keep=False, csv_path=tmp / "time_history.csv", plan=plan,
+                        progress=progress)
+        result.notes = early + result.notes
+        if progress is not None and (d.output.plots if plots is None else plots):
+            progress(0, 0, "drawing the figures")
         _write_rest(result, tmp, d.output.plots if plots is None else plots)
     result.csv_path = Path(out) / "time_history.csv"
     return result
@@ -65,19 +74,23 @@ def _plan(system, settings):
     return prepare(system, settings)
 
 
-def _solve(system, settings, keep: bool, csv_path=None, plan=None) -> Result:
+def _solve(system, settings, keep: bool, csv_path=None, plan=None, progress=None) -> Result:
     """One run and its estimate, or (with a tolerance) the run that meets it."""
     from .accuracy import estimate, meet_tolerance, warnings_for
     from .checks import diagnose
 
     if settings.tolerance is not None:
+        if progress is not None:
+            progress(0, 0, f"meeting the tolerance {settings.tolerance:g}")
         result = meet_tolerance(system, settings, keep=keep, csv_path=csv_path)
     else:
         plan = plan or _plan(system, settings)
         if keep:
             plan.check_size(keep=True)
-        result = plan.run(keep=keep, csv_path=csv_path)
+        result = plan.run(keep=keep, csv_path=csv_path, progress=progress)
         if settings.estimate:
+            if progress is not None:
+                progress(0, 0, "estimating the error")
             result.accuracy = estimate(result, settings)
     result.notes, result.warnings = diagnose(result)
     if result.spectra is not None:

@@ -13,8 +13,10 @@ import typer
 
 from . import __version__, outdir
 from .errors import AnalysisError, InputError
+from .terminal import Command, Group, Progress
 
 app = typer.Typer(
+    cls=Group,
     add_completion=False,
     no_args_is_help=True,
     pretty_exceptions_enable=False,
@@ -57,7 +59,7 @@ def _main(
     pass
 
 
-@app.command()
+@app.command(cls=Command)
 def run(
     deck: Annotated[Path, typer.Argument(help="TOML or YAML deck.")],
     out: Annotated[Optional[Path], typer.Option("--out", help="Output folder (default: the deck's).")] = None,
@@ -69,16 +71,22 @@ def run(
 ):
     """Time-history analysis of the deck: time_history.csv, summary.json and PNG plots."""
     from . import api, kernels
+    from .deck import ANALYSIS_SECTIONS
 
     if not kernels.cached(kernels.run_kernels()):
         say("note: compiling the numba kernels, once (a minute at most); later runs load them from the cache")
-    with user_errors():
-        d = api.load_deck(deck)
-        target = out if out is not None else output_dir(d, deck)
-        result = api.run(d, integrator=integrator, dt=dt, out=target, plots=plots and d.output.plots,
-                         tolerance=tolerance)
+    monitor = Progress()
+    try:
+        with user_errors():
+            d = api.load_deck(deck, need=ANALYSIS_SECTIONS)
+            target = out if out is not None else output_dir(d, deck)
+            result = api.run(d, integrator=integrator, dt=dt, out=target, plots=plots and d.output.plots,
+                             tolerance=tolerance, monitor=monitor)
+    finally:
+        monitor.close()
     for note in result.notes:  # after the run: a failing deck gets its error lines alone
-        say(f"note: {note}")
+        if note not in monitor.said:
+            say(f"note: {note}")
     for warning in result.warnings:
         say(f"warning: {warning}")
     say(run_line(result))
@@ -107,7 +115,7 @@ def run_line(result) -> str:
     return line
 
 
-@app.command("calibrate-plot")
+@app.command("calibrate-plot", cls=Command)
 def calibrate_plot(
     deck: Annotated[Path, typer.Argument(help="TOML or YAML deck with hysteresis sets (and optionally a loops table).")],
     sets: Annotated[Optional[list[str]], typer.Option("--set", help="Only this set (repeatable; default: all).")] = None,
@@ -126,7 +134,7 @@ def calibrate_plot(
     from .testdata import read_loop_data
 
     with user_errors():
-        d = load_deck(deck)
+        d = load_deck(deck)  # the sets (and [loops]) are enough
         names = _chosen_sets(deck, d, sets)
         if data is not None:
             measured = read_loop_data(data, u_units, f_units)
@@ -165,7 +173,7 @@ def calibrate_plot(
     say(f"wrote {target}")
 
 
-@app.command()
+@app.command(cls=Command)
 def calibrate(
     data: Annotated[Path, typer.Argument(help="Measured loop: CSV with displacement and force columns, units in the header.")],
     set_name: Annotated[str, typer.Option("--set", help="The set to identify (its name in --init).")],
@@ -274,7 +282,7 @@ def _split_list(text: str | None, what: str, convert=str) -> list | None:
     return out
 
 
-@app.command()
+@app.command(cls=Command)
 def study(
     deck: Annotated[Path, typer.Argument(help="TOML or YAML deck.")],
     integrators: Annotated[Optional[str], typer.Option(
@@ -344,7 +352,7 @@ def study(
     say(f"wrote {target}")
 
 
-@app.command()
+@app.command(cls=Command)
 def sweep(
     sweep_file: Annotated[Path, typer.Argument(metavar="SWEEP", help="TOML or YAML sweep file.")],
     workers: Annotated[Optional[int], typer.Option(
@@ -436,7 +444,7 @@ def sweep(
     say(f"wrote {target}")
 
 
-@app.command()
+@app.command(cls=Command)
 def spectrum(
     record: Annotated[Path, typer.Argument(help="Support acceleration record: PEER .AT2, time,value table, "
                                                  "or one column with --dt.")],
@@ -478,7 +486,7 @@ def spectrum(
     say(f"wrote {target}")
 
 
-@app.command()
+@app.command(cls=Command)
 def transmissibility(
     deck: Annotated[Path, typer.Argument(help="TOML or YAML deck (its excitation is replaced by the sine).")],
     direction: Annotated[str, typer.Option(help="Direction of the support's sine: x1 or x2.")],
@@ -557,7 +565,7 @@ def _sibling_dir(deck, deck_path: Path, suffix: str) -> Path:
     return base.with_name(base.name + suffix)
 
 
-@app.command("make-record")
+@app.command("make-record", cls=Command)
 def make_record(
     out: Annotated[Path, typer.Argument(help="CSV file to write: time_s,acceleration.")],
     duration: Annotated[float, typer.Option(min=0.1, help="Length [s].")] = 40.0,

@@ -163,17 +163,30 @@ class _Placed(_Model):
         return self
 
 
+def _number(v) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool)
+
+
 class Element(_Placed):
     hysteresis: str
     #: the deformation it can take (m): symmetric, or [lower, upper] with lower < 0 < upper
-    stroke: PosFloat | Annotated[list[float], Field(min_length=2, max_length=2)] | None = None
+    stroke: float | list[float] | None = None
 
-    @field_validator("stroke")
+    @field_validator("stroke", mode="before")
     @classmethod
-    def _stroke_brackets_zero(cls, v):
-        if isinstance(v, list) and not v[0] < 0.0 < v[1]:
-            raise ValueError(f"[{v[0]:g}, {v[1]:g}] must be [lower, upper] with lower < 0 < upper (m)")
-        return v
+    def _stroke(cls, v):
+        what = "a positive number (m) or [lower, upper] with lower < 0 < upper (m)"
+        if v is None:
+            return v
+        if _number(v):
+            if not (v > 0 and np.isfinite(v)):
+                raise ValueError(f"{v:g} must be {what}")
+            return float(v)
+        if isinstance(v, list) and len(v) == 2 and all(_number(x) and np.isfinite(x) for x in v):
+            if not v[0] < 0.0 < v[1]:
+                raise ValueError(f"[{v[0]:g}, {v[1]:g}] must be [lower, upper] with lower < 0 < upper (m)")
+            return [float(x) for x in v]
+        raise ValueError(f"{v!r} must be {what}")
 
     @property
     def stroke_limits(self) -> tuple[float, float] | None:
@@ -183,9 +196,10 @@ class Element(_Placed):
 
 
 class Damper(_Placed):
-    """A linear viscous damper: force c times its rate of deformation along angle_deg (eqs. 5-8)."""
+    """A linear viscous damper: force c times its rate of deformation along angle_deg (eqs. 5-8);
+    c = 0 keeps its place and columns with no force (a sweep's no-damper baseline)."""
 
-    c: PosFloat  # N s/m
+    c: Annotated[float, Field(ge=0)]  # N s/m
 
 
 # ---------------------------------------------------------------- excitation
@@ -370,7 +384,17 @@ class Output(_Model):
 class Loops(_Model):
     """Imposed-displacement protocol for ``rbhyst calibrate-plot`` (default: the seed's Fig. 2)."""
 
-    amplitude: PosFloat | Annotated[list[PosFloat], Field(min_length=1)] = 1.5
+    amplitude: float | list[float] = 1.5
+
+    @field_validator("amplitude", mode="before")
+    @classmethod
+    def _amplitudes(cls, v):
+        what = "a positive number (m) or a list of them"
+        if _number(v) and v > 0 and np.isfinite(v):
+            return float(v)
+        if isinstance(v, list) and v and all(_number(x) and x > 0 and np.isfinite(x) for x in v):
+            return [float(x) for x in v]
+        raise ValueError(f"{v!r} must be {what}")
     frequency_hz: PosFloat = 1.0
     cycles: Annotated[int, Field(ge=1)] = 2
     points_per_cycle: Annotated[int, Field(ge=8)] = 2000
@@ -590,15 +614,21 @@ def _messages(err: ValidationError) -> list[str]:
     return list(dict.fromkeys(lines))
 
 
-def parse_deck(data: Any) -> Deck:
-    """Validate a parsed mapping; raise InputError with one line per problem."""
+#: the sections an analysis needs (a deck for calibrate-plot needs only [hysteresis])
+ANALYSIS_SECTIONS = ("body", "elements", "analysis")
+
+
+def parse_deck(data: Any, need: tuple[str, ...] = ()) -> Deck:
+    """Validate a parsed mapping; raise InputError with one line per problem, every problem at
+    once: those of the keys given and every section of ``need`` that is missing."""
     if not isinstance(data, dict):
         raise InputError("(deck): the top level must be a table of keys")
+    missing = [f"{key}: required for an analysis" for key in need if data.get(key) is None]
     try:
         deck = Deck.model_validate(data)
     except ValidationError as err:
-        raise InputError(_messages(err)) from None
-    problems = cross_references(deck) + output_problems(deck)
+        raise InputError(_messages(err) + missing) from None
+    problems = missing + cross_references(deck) + output_problems(deck)
     if problems:
         raise InputError(problems)
     return deck
@@ -626,9 +656,10 @@ def read_mapping(path: Path) -> dict:
     raise InputError(f"{path}: unknown deck format {suffix!r}; use .toml, .yaml or .yml")
 
 
-def load_deck(path: str | Path) -> Deck:
-    """Read and validate a deck file; relative paths in it resolve beside it."""
-    deck = parse_deck(read_mapping(Path(path)))
+def load_deck(path: str | Path, need: tuple[str, ...] = ()) -> Deck:
+    """Read and validate a deck file; relative paths in it resolve beside it. ``need``: sections
+    it must have (ANALYSIS_SECTIONS for a run), named with every other problem at once."""
+    deck = parse_deck(read_mapping(Path(path)), need)
     deck._source = Path(path).resolve()
     return deck
 

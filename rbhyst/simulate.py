@@ -151,6 +151,10 @@ MAX_COMPUTE_STEPS = 10**10
 MAX_KEPT_BYTES = 2 * 1024**3
 #: bytes of time_history.csv per value: 10 significant digits, sign, exponent, separator
 CSV_BYTES_PER_VALUE = 16
+#: a CSV larger than this is said before the run starts, with the output.every that keeps it
+#: under SMALL_CSV_BYTES
+LARGE_CSV_BYTES = 1e9
+SMALL_CSV_BYTES = 1e8
 
 
 class Plan:
@@ -160,9 +164,11 @@ class Plan:
         self.system, self.settings, self.method = system, s, method
         self.n_steps, self.nsub = grid(system, s)
 
-    def check_size(self, keep: bool, folder=None) -> None:
+    def check_size(self, keep: bool, folder=None) -> list[str]:
         """Refuse, before anything runs, what cannot fit: rows kept in memory beyond
-        MAX_KEPT_BYTES, a CSV larger than the free disk, an absurd number of steps."""
+        MAX_KEPT_BYTES, a CSV larger than the free disk, an absurd number of steps. Returns
+        what to say before it starts: a CSV beyond LARGE_CSV_BYTES, and the output.every that
+        would keep it under SMALL_CSV_BYTES."""
         import shutil
         from pathlib import Path
 
@@ -176,7 +182,7 @@ class Plan:
         rows = self.n_steps // s.every + 1
         n_cols = len(Layout(self.system, s.points).names)
         need = rows * n_cols * CSV_BYTES_PER_VALUE
-        every_for = lambda budget: max(s.every, -(-self.n_steps * n_cols * CSV_BYTES_PER_VALUE // max(budget, 1)))
+        every_for = lambda budget: max(s.every, -(-self.n_steps * n_cols * CSV_BYTES_PER_VALUE // max(int(budget), 1)))
         if folder is not None:
             probe = Path(folder)
             while not probe.exists() and probe != probe.parent:
@@ -192,8 +198,16 @@ class Plan:
                 f"{where}, output.every: keeping {rows:.4g} rows of {n_cols} columns in memory takes "
                 f"{rows * n_cols * 8 / 1e9:.3g} GB: stream them to a folder instead (rbhyst.run(deck, out=...)), "
                 f"or raise output.every (to {every_for(MAX_KEPT_BYTES // 2)} or more)")
+        if folder is not None and need > LARGE_CSV_BYTES:
+            return [f"output: time_history.csv will take about {need / 1e9:.3g} GB ({rows:.4g} rows of {n_cols} "
+                    f"columns); output.every = {every_for(SMALL_CSV_BYTES)} keeps it under "
+                    f"{SMALL_CSV_BYTES / 1e6:.0f} MB (peaks, extremes and spectra still see every step)"]
+        return []
 
-    def run(self, keep: bool = True, csv_path=None, compare_every: int | None = None) -> Result:
+    def run(self, keep: bool = True, csv_path=None, compare_every: int | None = None, progress=None) -> Result:
+        """``progress(done, total, label)``, if given, hears how far the run is."""
+        if progress is not None:
+            progress(0, 0, f"{self.settings.integrator}: adaptive integration")
         return self.method.solve(self.system, self.settings, keep=keep, csv_path=csv_path)
 
 
@@ -274,7 +288,7 @@ class _FixedStepPlan(Plan):
             for k in range(int(lo), int(hi), chunk):
                 yield k, min(chunk, int(hi) - k), int(nsub)
 
-    def run(self, keep: bool = True, csv_path=None, compare_every: int | None = None) -> Result:
+    def run(self, keep: bool = True, csv_path=None, compare_every: int | None = None, progress=None) -> Result:
         system, s = self.system, self.settings
         ne = self.bvec.shape[0]
         x, st = self._state()
@@ -302,6 +316,8 @@ class _FixedStepPlan(Plan):
                 t = t_c[1:] if sub > 1 else s.dt * (first + 1 + np.arange(n))  # t_n = n dt, never accumulated
                 m = n * sub
                 rows.add(Raw(t=t, d=buf.d[:m], v=buf.v[:m], u=buf.u[:m], f=buf.f[:m], e=buf.e[:m]), sub=sub)
+                if progress is not None:
+                    progress(first + n, self.n_steps, f"{s.integrator}: time stepping")
         finally:
             table = rows.close()
         stats = RunStats(

@@ -1,0 +1,95 @@
+"""Input a new user got wrong without being told: each gets rbhyst's own frame (one ``error:``
+line per problem, every problem at once, exit 2) or a warning with its numbers."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import rbhyst
+from conftest import invoke, seed_deck, square_linear_deck, write_deck
+
+G = 9.80665
+
+
+def test_gravity_in_mm_s2_warns_with_its_numbers(tmp_path):
+    """A mm/s2 slip once ran silently to a static u2 of -490 m on a 1 m body."""
+    data = square_linear_deck()
+    data["body"]["gravity"] = [0.0, -G * 1000.0]
+    data["excitation"] = {"support": {"x1": {"type": "sine", "amplitude": 0.1, "frequency_hz": 2.0, "units": "g"}}}
+    res = rbhyst.run(write_deck(tmp_path, data), estimate=False)
+    said = " ".join(res.warnings)
+    assert "|g| = 9806.65 m/s2 is 1000 times the standard 9.80665 m/s2" in said
+    assert "static deflection under the weight is 12.26 m" in said  # m g / 2k = 500 * 9806.65 / 4e5
+    assert any(n.startswith("body.gravity: the weight 4.90332e+06 N rests on the elements") for n in res.notes)
+
+
+def test_standard_gravity_shows_its_preload_and_warns_of_nothing(tmp_path):
+    data = square_linear_deck()
+    data["body"]["gravity"] = [0.0, -G]
+    data["excitation"] = {"support": {"x1": {"type": "sine", "amplitude": 0.1, "frequency_hz": 2.0, "units": "g"}}}
+    res = rbhyst.run(write_deck(tmp_path, data), estimate=False)
+    assert not [w for w in res.warnings if "gravity" in w]
+    [note] = [n for n in res.notes if n.startswith("body.gravity")]
+    assert "u2 = -0.01226 m" in note  # 500 kg * g / (2 x 2e5 N/m)
+
+
+def test_an_element_beyond_its_stroke_under_the_weight_alone_is_warned(tmp_path):
+    data = square_linear_deck()
+    data["body"]["gravity"] = [0.0, -G]
+    data["elements"][2]["stroke"] = 0.005
+    data["excitation"] = {"support": {"x1": {"type": "sine", "amplitude": 0.01, "frequency_hz": 2.0, "units": "g"}}}
+    res = rbhyst.run(write_deck(tmp_path, data), estimate=False)
+    assert any("element e3 ('lin') is beyond its stroke under the weight alone: -0.01226 m" in w for w in res.warnings)
+
+
+def test_a_damper_of_zero_keeps_its_columns_with_no_force(tmp_path):
+    """A sweep's no-damper baseline: c = 0 is accepted and changes no number."""
+    data = seed_deck(duration=0.5)
+    plain = rbhyst.run(write_deck(tmp_path, data, "plain"), estimate=False)
+    data["dampers"] = [{"vertex": 1, "angle_deg": 0.0, "c": 0.0}]
+    zero = rbhyst.run(write_deck(tmp_path, data, "zero"), estimate=False)
+    assert "d1_f_N" in zero.columns and np.all(zero.column("d1_f_N") == 0.0)
+    np.testing.assert_array_equal(zero.column("u1_m"), plain.column("u1_m"))
+    np.testing.assert_array_equal(zero.column("at1_m_s2"), plain.column("at1_m_s2"))
+
+
+def test_a_negative_stroke_is_one_line(tmp_path):
+    data = seed_deck()
+    data["elements"][1]["stroke"] = -0.01
+    code, err = invoke("run", write_deck(tmp_path, data), "--no-plots")
+    assert code == 2
+    assert err.splitlines() == ["error: elements[2].stroke: -0.01 must be a positive number (m) or "
+                                "[lower, upper] with lower < 0 < upper (m)"]
+
+
+def test_an_empty_deck_names_every_missing_section(tmp_path):
+    deck = tmp_path / "empty.toml"
+    deck.write_text("")
+    code, err = invoke("run", deck)
+    assert code == 2
+    assert err.splitlines() == ["error: hysteresis: required key is missing", "error: body: required for an analysis",
+                                "error: elements: required for an analysis",
+                                "error: analysis: required for an analysis"]
+    assert not (tmp_path / "results").exists()
+
+
+@pytest.mark.parametrize("args, lines", [
+    (["run", "DECK", "--dt", "abc"], ["error: --dt: 'abc' is not valid: input should be a valid number, unable to "
+                                      "parse string as a number"]),
+    (["run", "DECK", "--dt", "abc", "--tolerance=x"],
+     ["error: --dt: 'abc' is not valid: input should be a valid number, unable to parse string as a number",
+      "error: --tolerance: 'x' is not valid: input should be a valid number, unable to parse string as a number"]),
+    (["make-record", "OUT.csv", "--pga", "-1"], ["error: --pga: '-1' is not valid: input should be greater than or "
+                                                 "equal to 0"]),
+    (["spectrum", "REC.csv"], ["error: --units: required"]),
+    (["spectrum"], ["error: RECORD: required", "error: --units: required"]),
+])
+def test_command_line_mistakes_get_rbhyst_s_frame(tmp_path, args, lines):
+    """Not the library's boxed usage text with a {deck} placeholder: one error line each, all at once."""
+    deck = write_deck(tmp_path, seed_deck())
+    args = [str(deck) if a == "DECK" else str(tmp_path / a) if a.endswith(".csv") else a for a in args]
+    code, err = invoke(*args)
+    assert code == 2
+    assert err.splitlines() == lines
+    assert list(tmp_path.iterdir()) == [deck]
