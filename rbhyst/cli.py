@@ -407,11 +407,13 @@ def sweep(
                 axes = f"{m} motion{'s' * (m != 1)} x {k} scale level{'s' * (k != 1)}" + \
                     "".join(f" x {key}" for key in sw.vary_keys)
                 work = f"computing {todo} on {outcome.where}" if todo else "nothing to compute"
-                line = f"sweep: {n} case{'s' * (n != 1)} ({axes}): {outcome.reused} in {target}, {work}"
-                if console.is_terminal:  # above the live bar
-                    console.print(line, markup=False, highlight=False, soft_wrap=True)
-                else:
-                    say(line)
+                lines = [f"note: {note}" for note in outcome.notes]
+                lines.append(f"sweep: {n} case{'s' * (n != 1)} ({axes}): {outcome.reused} in {target}, {work}")
+                for line in lines:
+                    if console.is_terminal:  # above the live bar
+                        console.print(line, markup=False, highlight=False, soft_wrap=True)
+                    else:
+                        say(line)
                 t0[0] = time.perf_counter()
 
             try:

@@ -45,6 +45,7 @@ class Outcome:
     reused: int = 0  # cases the folder held already
     missing: list[str] = field(default_factory=list)  # keys lost with a worker
     missing_reason: str = ""
+    notes: list[str] = field(default_factory=list)  # said before the cases run
     where: str = ""
     t_start: float = 0.0
     t_first: float | None = None  # when the first batch came back (a worker started and ran it)
@@ -120,14 +121,22 @@ def run_sweep(sweep: Sweep, out: str | Path | None = None, workers: int | None =
     journal = Journal(out, fresh=fresh)
     outcome = Outcome(sweep, out, t_start=time.perf_counter())
     todo: dict[str, dict] = {}
+    untrusted = {d.key: d.why for d in journal.damaged}
     for c in sweep.cases:
         if c.problem is not None or c.key in todo:
             continue
         e = journal.entries.get(c.key)
-        if e is not None and not (save_histories and e.get("status") == "ok" and not journal.has_history(c.key)):
+        if e is not None and save_histories and e.get("status") == "ok":
+            why = journal.history_problem(c.key)
+            if why not in (None, "not kept"):
+                untrusted[c.key] = why
+            if why is not None:
+                e = None
+        if e is not None:
             outcome.results[c.key] = e
         else:
             todo[c.key] = c.values
+    outcome.notes.extend(damage_notes(sweep, untrusted))
     outcome.reused = sum(1 for c in sweep.cases if c.key in outcome.results)
     try:
         journal.open()
@@ -219,6 +228,25 @@ def _compute(backend, todo: list[tuple[str, dict]], journal: Journal, outcome: O
             backend.close()
 
 
+def damage_notes(sweep: Sweep, untrusted: dict[str | None, str], shown: int = 5) -> list[str]:
+    """One line naming the stored cases that could not be trusted (they are computed again),
+    by their numbers in cases.csv and why; damaged lines of cases no longer in the sweep are
+    counted only."""
+    numbers = {c.key: c.number for c in sweep.cases}
+    named = sorted((numbers[k], why) for k, why in untrusted.items() if k in numbers)
+    other = sum(1 for k in untrusted if k not in numbers)
+    if not named and not other:
+        return []
+    parts = [f"case {n} ({why})" for n, why in named[:shown]]
+    if len(named) > shown:
+        parts.append(f"{len(named) - shown} more")
+    if other:
+        parts.append(f"{other} damaged line{'s' * (other != 1)} of no case of this sweep (set aside)")
+    n = len(named)
+    return [f"the store could not vouch for {n} finished case{'s' * (n != 1)}, computed again: " + "; ".join(parts)
+            if n else f"the store had {'; '.join(parts)}"]
+
+
 def batch_size(remaining: int, workers: int, per_case: float | None) -> int:
     """Guided batches: a third of each worker's share of what remains, so that batches shrink
     towards the end and no worker waits long for the last one; at most about BATCH_S of work
@@ -237,9 +265,10 @@ def _keep(results: list[dict], journal: Journal, outcome: Outcome, save_historie
 
         name, tmp = journal.new_history_file()
         write_part(tmp, journal.history_path(name), histories)
+        digest = journal.sum_of_history(name)
         for r in results:
             if r["status"] == "ok":
-                r["history"] = name
+                r["history"], r["history_sha256"] = name, digest
     keep = [r for r in results if not r.get("internal")]
     if keep:
         journal.add(keep)

@@ -3,10 +3,14 @@ folder, ``.rbhyst-sweep/``, that rbhyst makes and marks, and touches nothing els
 
 - ``journal.jsonl``: a first line that marks the file as rbhyst's, then one JSON line per
   finished case (its key, status, message, peaks, ...), appended and flushed as each batch
-  comes back, with Ctrl-C and SIGTERM held off while a line is written. A line cut short (a
-  power cut) is dropped when the journal is next opened; a case is known by its latest line.
+  comes back, with Ctrl-C and SIGTERM held off while a line is written. Each line carries the
+  sha256 of its own content (``sha256``): a case is known by its latest line that proves
+  itself. A line that does not (cut short by a crash, or altered since it was written) is set
+  aside when the journal is next opened: :attr:`Journal.damaged` names it and why, the next
+  append rewrites the journal without it, and its case is computed again.
 - ``histories/``: with --save-histories, one Parquet file per batch of finished cases,
-  written beside and renamed into place before the journal names it.
+  written beside and renamed into place before the journal names it; the journal line keeps
+  the file's sha256, and a file that no longer matches counts as missing.
 
 A ``.rbhyst-sweep`` that rbhyst did not make (no marked journal in it) is refused, and so
 is one that is a file or a link. ``--fresh`` removes the journal and the files it names, and
@@ -16,10 +20,13 @@ the folders when that leaves them empty.
 from __future__ import annotations
 
 import fcntl
+import hashlib
 import json
 import os
+import re
 import uuid
 from pathlib import Path
+from typing import NamedTuple
 
 from .. import __version__
 from ..errors import InputError
@@ -28,7 +35,33 @@ from ..outdir import signals_held
 FOLDER = ".rbhyst-sweep"
 JOURNAL = "journal.jsonl"
 HISTORIES = "histories"
-_MARK_KEY, _FORMAT = "rbhyst_sweep_journal", 1
+_MARK_KEY, _FORMAT = "rbhyst_sweep_journal", 2
+_FORMATS = (1, 2)  # format 1 had no checksums: its cases are computed again
+SUM = "sha256"
+_KEY_IN_TEXT = re.compile(rb'"key": *"([0-9a-f]{16,64})"')
+
+
+def line_sum(entry: dict) -> str:
+    """The sha256 of a journal entry's content: its canonical JSON without the sum itself."""
+    body = {k: v for k, v in entry.items() if k != SUM}
+    return hashlib.sha256(json.dumps(body, sort_keys=True, separators=(",", ":"),
+                                     allow_nan=False).encode()).hexdigest()
+
+
+def file_sum(path: Path) -> str:
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for block in iter(lambda: fh.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+class Damage(NamedTuple):
+    """A journal line that does not prove its content: its case key (None where too little
+    of the line is left to tell) and why, in words."""
+
+    key: str | None
+    why: str
 
 
 class Journal:
@@ -41,6 +74,9 @@ class Journal:
         self._check_ours()
         if fresh:
             self.clear()
+        self.damaged: list[Damage] = []
+        self._ragged = False
+        self._sums: dict[str, str] = {}  # history file name -> its sha256, once checked
         self.entries: dict[str, dict] = self._read()
         self._fh = None
 
@@ -62,22 +98,51 @@ class Journal:
     # ---------------------------------------------------------------- reading and writing
 
     def _read(self) -> dict[str, dict]:
+        """The entries that prove their content, by key (the latest line wins); what does not
+        goes into ``self.damaged``, except a case that a later good line stands for."""
+        self.damaged = []
         if not self.path.exists():
             return {}
-        entries: dict[str, dict] = {}
         with open(self.path, "rb") as fh:
             data = fh.read()
+        self._ragged = bool(data) and not data.endswith(b"\n")  # the next line must start on its own
         lines = data.split(b"\n")
-        for line in lines[1:]:
+        try:
+            version = json.loads(lines[0]).get(_MARK_KEY)
+        except (ValueError, AttributeError):
+            version = None
+        entries: dict[str, dict] = {}
+        bad: dict[str | None, str] = {}
+        unknown: list[str] = []
+        last = len(lines) - 1  # lines[last] is b"" when the file ends with a newline
+        for i, line in enumerate(lines[1:], start=1):
+            if not line.strip():
+                continue
+            why = None
             try:
                 e = json.loads(line)
             except ValueError:
-                continue  # a line cut short by a crash
-            if isinstance(e, dict) and isinstance(e.get("key"), str):
+                e = None
+            if not (isinstance(e, dict) and isinstance(e.get("key"), str)):
+                why = ("cut short by an interrupted write" if i == last
+                       else f"line {i + 1} of {JOURNAL} is damaged: cut short or edited")
+            elif version == 1 and SUM not in e:
+                why = "kept by an earlier rbhyst without a checksum"
+            elif e.get(SUM) != line_sum(e):
+                why = f"line {i + 1} of {JOURNAL} was altered after it was written: its checksum differs"
+            if why is None:
                 entries[e["key"]] = e
-        if data and not data.endswith(b"\n"):  # cut short: the next line must start on a line of its own
-            with signals_held(), open(self.path, "r+b") as fh:
-                fh.truncate(data.rfind(b"\n") + 1)
+                bad.pop(e["key"], None)
+                continue
+            m = _KEY_IN_TEXT.search(line)
+            key = e["key"] if isinstance(e, dict) and isinstance(e.get("key"), str) else (
+                m.group(1).decode() if m else None)
+            entries.pop(key, None)  # an older good line of the case does not stand for it either
+            if key is None:
+                unknown.append(why)
+            else:
+                bad[key] = why
+        self.damaged = [Damage(k, w) for k, w in bad.items()] + [Damage(None, w) for w in unknown]
         return entries
 
     def open(self) -> None:
@@ -87,25 +152,43 @@ class Journal:
         with signals_held():
             self.folder.mkdir(parents=True, exist_ok=True)
             new = not self.path.exists()
-            self._fh = open(self.path, "ab")
-            try:  # one sweep at a time writes here
-                fcntl.flock(self._fh.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
-            except OSError:
-                self._fh.close()
-                self._fh = None
-                raise InputError(f"{self.out}: another rbhyst sweep is writing into this folder") from None
+            self._fh = self._locked(open(self.path, "ab"))
             for p in (self.folder / HISTORIES).glob(".*.parquet.partial"):
                 p.unlink()  # left by a sweep that was killed while writing them
             if new:
-                mark = {_MARK_KEY: _FORMAT, "about": "Finished cases of rbhyst sweep, one per line, by key.",
-                        "rbhyst_version": __version__}
-                self._fh.write((json.dumps(mark) + "\n").encode())
+                self._fh.write(_mark_line())
                 self._fh.flush()
+            elif self.damaged or self._ragged or not _marked(self.path, (_FORMAT,)):
+                self._rewrite()
+
+    def _locked(self, fh):
+        try:  # one sweep at a time writes here
+            fcntl.flock(fh.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except OSError:
+            fh.close()
+            self._fh = None
+            raise InputError(f"{self.out}: another rbhyst sweep is writing into this folder") from None
+        return fh
+
+    def _rewrite(self) -> None:
+        """The journal anew, with the lines that prove themselves only (under the lock): written
+        beside, flushed to disk and renamed over the old one, so that a crash leaves one or the
+        other whole."""
+        tmp = self.folder / f".{JOURNAL}.partial"
+        with open(tmp, "wb") as fh:
+            fh.write(_mark_line())
+            fh.write(b"".join(_entry_line(e) for e in self.entries.values()))
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.replace(tmp, self.path)
+        old, self._fh = self._fh, None
+        old.close()  # its lock goes with it; the new file is locked at once
+        self._fh = self._locked(open(self.path, "ab"))
 
     def add(self, entries: list[dict]) -> None:
         """Append finished cases, whole lines only, and flush them to the file."""
         self.open()
-        text = b"".join((json.dumps(e, allow_nan=False) + "\n").encode() for e in entries)
+        text = b"".join(_entry_line(e) for e in entries)
         with signals_held():
             self._fh.write(text)
             self._fh.flush()
@@ -132,9 +215,28 @@ class Journal:
         name = f"{uuid.uuid4().hex}.parquet"
         return name, self.folder / HISTORIES / f".{name}.partial"
 
-    def has_history(self, key: str) -> bool:
+    def history_problem(self, key: str) -> str | None:
+        """None where the case's histories are on disk as they were written; else why not."""
         e = self.entries.get(key)
-        return bool(e and e.get("history") and self.history_path(e["history"]).is_file())
+        if not (e and e.get("history")):
+            return "not kept"
+        name = e["history"]
+        path = self.history_path(name)
+        if not path.is_file():
+            return f"its histories file {HISTORIES}/{name} is missing"
+        if name not in self._sums:
+            self._sums[name] = file_sum(path)
+        if e.get("history_sha256") != self._sums[name]:
+            return f"its histories file {HISTORIES}/{name} was altered after it was written"
+        return None
+
+    def has_history(self, key: str) -> bool:
+        return self.history_problem(key) is None
+
+    def sum_of_history(self, name: str) -> str:
+        """The sha256 of a history file just written (kept in its cases' journal lines)."""
+        self._sums[name] = file_sum(self.history_path(name))
+        return self._sums[name]
 
     # ---------------------------------------------------------------- starting over
 
@@ -158,10 +260,20 @@ class Journal:
                     pass
 
 
-def _marked(path: Path) -> bool:
+def _mark_line() -> bytes:
+    mark = {_MARK_KEY: _FORMAT, "about": "Finished cases of rbhyst sweep, one per line, by key; each line "
+            f"carries the sha256 of its canonical JSON without '{SUM}'.", "rbhyst_version": __version__}
+    return (json.dumps(mark) + "\n").encode()
+
+
+def _entry_line(entry: dict) -> bytes:
+    return (json.dumps({**entry, SUM: line_sum(entry)}, allow_nan=False) + "\n").encode()
+
+
+def _marked(path: Path, formats=_FORMATS) -> bool:
     try:
         with open(path, "rb") as fh:
             first = json.loads(fh.readline())
-        return isinstance(first, dict) and first.get(_MARK_KEY) == _FORMAT
+        return isinstance(first, dict) and first.get(_MARK_KEY) in formats
     except (OSError, ValueError):
         return False
