@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 from pathlib import Path, PurePosixPath
 
 from . import __version__
-from .errors import InputError
+from .errors import DiskFull, InputError, byte_size, is_disk_full
 
 MANIFEST = ".rbhyst.json"
 STAGING_PREFIX = ".rbhyst-staging-"
@@ -62,6 +62,7 @@ def staged_directory(target: Path):
     created = _make_folders(target)
     try:
         owned = read_manifest(target)
+        free = shutil.disk_usage(target).free
         tmp = Path(tempfile.mkdtemp(prefix=STAGING_PREFIX, dir=target))
     except OSError as exc:
         _remove_empty(created)
@@ -81,11 +82,14 @@ def staged_directory(target: Path):
             _commit(target, tmp, files, owned)
             committed = True
             written.append(target)
-    except BaseException:
+    except BaseException as exc:
         if not committed:  # (a signal held during the commit is raised after it: nothing to undo)
+            staged = _bytes_under(tmp) if is_disk_full(exc) else 0
             with signals_held():
                 shutil.rmtree(tmp, ignore_errors=True)
                 _remove_empty(created)
+            if is_disk_full(exc):  # (what was staged is a floor too: others may have freed space)
+                raise DiskFull(target, max(staged, free)) from None
         raise
 
 
@@ -117,11 +121,14 @@ def replace_own_file(path: Path, text: str, mark: str) -> None:
             os.replace(tmp, path)
             tmp = None
             written.append(path)
-    except BaseException:
+    except BaseException as exc:
         with signals_held():
             if tmp is not None:
                 tmp.unlink(missing_ok=True)
             _remove_empty(created)
+        if is_disk_full(exc):
+            raise DiskFull(path.parent, None, f"{path.name} ({byte_size(len(text.encode()))})",
+                           f"{path.name} was not changed") from None
         raise
 
 
@@ -193,6 +200,17 @@ def _files_under(tmp: Path) -> list[str]:
     return sorted(out)
 
 
+def _bytes_under(folder: Path) -> int:
+    total = 0
+    for root, _, names in os.walk(folder):
+        for n in names:
+            try:
+                total += os.lstat(os.path.join(root, n)).st_size
+            except OSError:
+                pass
+    return total
+
+
 def _parents(rel: str) -> list[str]:
     """'a/b/c.csv' -> ['a', 'a/b']."""
     parts = PurePosixPath(rel).parts[:-1]
@@ -240,7 +258,13 @@ def _commit(target: Path, tmp: Path, files: list[str], owned: Manifest) -> None:
             (target / d).rmdir()  # only when empty: what someone else put there stays
         except OSError:
             pass
-    _write_manifest(target, tmp, Manifest(set(files), folders))
+    try:
+        _write_manifest(target, tmp, Manifest(set(files), folders))
+    except OSError as exc:
+        if not is_disk_full(exc):
+            raise
+        # the results are in; the manifest written first still names every file of ours
+        # (names of removed ones too, which is harmless): leave it rather than fail a done job
     shutil.rmtree(tmp)
 
 

@@ -13,7 +13,7 @@ import time
 import numpy as np
 
 from . import integrators, kernels
-from .errors import AnalysisError, InputError
+from .errors import AnalysisError, InputError, byte_size
 from .history import Extremes, Layout, PlotData, Raw, body_spectrum_columns, estimate_columns
 from .kernels import N_STATE, N_X, X_A, X_CUR, X_D, X_ITER, X_LEVEL_USED, X_OMEGA_DT2, X_STEPS, X_SUBSTEPS
 from .model import System
@@ -190,9 +190,9 @@ class Plan:
             free = shutil.disk_usage(probe).free
             if need > 0.9 * free:
                 raise InputError(
-                    f"{where}, output.every: the run would write {rows:.4g} rows of {n_cols} columns "
-                    f"(about {need / 1e9:.3g} GB of time_history.csv) with {free / 1e9:.3g} GB free on the disk: "
-                    f"output.every = {every_for(int(0.5 * free))} or a shorter analysis.duration would fit")
+                    f"{folder}: {where}, output.every: the run would write {rows:.4g} rows of {n_cols} columns "
+                    f"(about {byte_size(need)} of time_history.csv) with {byte_size(free)} free on the folder's "
+                    f"disk: output.every = {every_for(int(0.5 * free))} or a shorter analysis.duration would fit")
         if keep and rows * n_cols * 8 > MAX_KEPT_BYTES:
             raise InputError(
                 f"{where}, output.every: keeping {rows:.4g} rows of {n_cols} columns in memory takes "

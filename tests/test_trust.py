@@ -201,7 +201,7 @@ def test_a_run_that_cannot_fit_the_disk_is_refused_before_anything_runs(tmp_path
     out = tmp_path / "o"
     code, err = run_cli("run", write_deck(tmp_path, data), "--out", out, "--no-plots")
     assert code == 2 and len(err.splitlines()) == 1, err
-    assert err.startswith("error: analysis.duration, analysis.dt, output.every: the run would write 1e+09 rows")
+    assert err.startswith(f"error: {out}: analysis.duration, analysis.dt, output.every: the run would write 1e+09 rows")
     assert "output.every = " in err and not out.exists()
 
 

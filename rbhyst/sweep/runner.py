@@ -13,7 +13,7 @@ from pathlib import Path
 from typing import Callable
 
 from .. import __version__
-from ..errors import InputError
+from ..errors import DiskFull, InputError
 from ..outdir import MANIFEST, read_manifest, staged_directory
 from .backends import WorkerLost
 from .cases import Sweep
@@ -264,7 +264,8 @@ def _keep(results: list[dict], journal: Journal, outcome: Outcome, save_historie
         from .histories import write_part
 
         name, tmp = journal.new_history_file()
-        write_part(tmp, journal.history_path(name), histories)
+        with journal.space(tmp):
+            write_part(tmp, journal.history_path(name), histories)
         digest = journal.sum_of_history(name)
         for r in results:
             if r["status"] == "ok":
@@ -278,6 +279,16 @@ def _keep(results: list[dict], journal: Journal, outcome: Outcome, save_historie
 
 
 def _write(outcome: Outcome, journal: Journal, save_histories: bool, plots: bool) -> None:
+    try:
+        _write_files(outcome, journal, save_histories, plots)
+    except DiskFull as err:
+        n = len(outcome.results)
+        raise DiskFull(err.folder, err.free, "the sweep's tables" + " and plots" * plots,
+                       f"its {n} case{'s are' if n != 1 else ' is'} kept in {journal.folder}: the same command "
+                       "writes them once there is space") from None
+
+
+def _write_files(outcome: Outcome, journal: Journal, save_histories: bool, plots: bool) -> None:
     sweep = outcome.sweep
     header, rows = outcome.table()
     s_header, s_rows = stats_table(sweep.cases, sweep.vary_keys, outcome.results)

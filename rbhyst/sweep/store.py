@@ -24,12 +24,14 @@ import hashlib
 import json
 import os
 import re
+import shutil
 import uuid
+from contextlib import contextmanager
 from pathlib import Path
 from typing import NamedTuple
 
 from .. import __version__
-from ..errors import InputError
+from ..errors import DiskFull, InputError, is_disk_full
 from ..outdir import signals_held
 
 FOLDER = ".rbhyst-sweep"
@@ -76,6 +78,7 @@ class Journal:
             self.clear()
         self.damaged: list[Damage] = []
         self._ragged = False
+        self._free: int | None = None
         self._sums: dict[str, str] = {}  # history file name -> its sha256, once checked
         self.entries: dict[str, dict] = self._read()
         self._fh = None
@@ -149,8 +152,9 @@ class Journal:
         """Create the folder and the marked journal if needed; then append."""
         if self._fh is not None:
             return
-        with signals_held():
+        with signals_held(), self.space():
             self.folder.mkdir(parents=True, exist_ok=True)
+            self._free = shutil.disk_usage(self.folder).free
             new = not self.path.exists()
             self._fh = self._locked(open(self.path, "ab"))
             for p in (self.folder / HISTORIES).glob(".*.parquet.partial"):
@@ -160,6 +164,29 @@ class Journal:
                 self._fh.flush()
             elif self.damaged or self._ragged or not _marked(self.path, (_FORMAT,)):
                 self._rewrite()
+
+    @contextmanager
+    def space(self, partial: Path | None = None):
+        """A full disk while keeping cases becomes one DiskFull line saying what is kept (a
+        line it cut short is set aside by its checksum next time); ``partial``, a file being
+        written, is removed."""
+        try:
+            yield
+        except OSError as exc:
+            if not is_disk_full(exc):
+                raise
+            if partial is not None:
+                partial.unlink(missing_ok=True)
+            fh, self._fh = self._fh, None
+            if fh is not None:
+                try:
+                    fh.close()
+                except OSError:  # its buffer cannot be written either
+                    pass
+            n = len(self.entries)
+            kept = (f"{n} finished case{'s are' if n != 1 else ' is'} kept: the same command computes the rest"
+                    if n else "no case was kept")
+            raise DiskFull(self.folder, self._free, "the finished cases", kept) from None
 
     def _locked(self, fh):
         try:  # one sweep at a time writes here
@@ -175,7 +202,7 @@ class Journal:
         beside, flushed to disk and renamed over the old one, so that a crash leaves one or the
         other whole."""
         tmp = self.folder / f".{JOURNAL}.partial"
-        with open(tmp, "wb") as fh:
+        with self.space(tmp), open(tmp, "wb") as fh:
             fh.write(_mark_line())
             fh.write(b"".join(_entry_line(e) for e in self.entries.values()))
             fh.flush()
@@ -189,7 +216,7 @@ class Journal:
         """Append finished cases, whole lines only, and flush them to the file."""
         self.open()
         text = b"".join(_entry_line(e) for e in entries)
-        with signals_held():
+        with signals_held(), self.space():
             self._fh.write(text)
             self._fh.flush()
         for e in entries:
