@@ -1,0 +1,2 @@
+"""Layer 5, analyses: what is built on runs. The response spectrum of a record,
+transmissibility, the convergence study, calibration of hysteresis parameters, sweeps."""
