@@ -48,12 +48,12 @@ def main() -> None:
     # like the C loop: the whole run as one chunk into the same output buffers every repeat
     t_grid = settings.dt * np.arange(n + 1)
     load = np.ascontiguousarray(system.excitation.load(t_grid, system.mass))
-    buf = _Buffers(n, ne)
+    buf = _Buffers(n, ne, system.n)
     times = []
     for _ in range(args.repeat):
         x, st = plan._state()
         t0 = time.perf_counter()
-        plan._call(load, 0.0, 1, n, x, st, buf)
+        plan._call(load, 0.0, 1, settings.dt, 1, n, x, st, buf)
         times.append(time.perf_counter() - t0)
     t_numba = min(times)
     d_numba = buf.d.copy()
@@ -61,7 +61,7 @@ def main() -> None:
     t_simulate = min(plan.run().wall_s for _ in range(args.repeat))
 
     h = settings.dt
-    coef = integrators.get("chang").coefficients(system.mass, system.K0, np.zeros((3, 3)), h)
+    coef = integrators.get("chang").coefficients(system.mass, system.K0, np.zeros((system.n, system.n)), h)
     t_grid = h * np.arange(n + 1)
     load = system.excitation.load(t_grid, system.mass)
     with tempfile.TemporaryDirectory() as tmp:

@@ -17,8 +17,10 @@ from rbhyst.model import deck as dk
 from rbhyst.model import signals
 from rbhyst.errors import InputError
 from rbhyst.model.body import Body, body_from_deck
+from rbhyst.model.coordinates import PLANE, Coordinate, translations
 from rbhyst.model.hysteresis import limiting_slope, reversal_stiffness
 from rbhyst.files.units import check_declared
+from rbhyst.model.points import point_matrix
 from rbhyst.model.records import Series, read_record
 
 Signal = Callable[[np.ndarray], np.ndarray]
@@ -34,9 +36,26 @@ class Excitation:
     p2: Signal | None = None
     m3: Signal | None = None
     point: tuple[float, float] = (0.0, 0.0)  # where p1, p2 act, relative to G
-    #: a load that does not vary: the weight, once the static equilibrium under it is known
-    constant: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    #: a load that does not vary (n,): the weight, once the static equilibrium under it is known;
+    #: None: zero
+    constant: tuple[float, ...] | None = None
     duration: float | None = None  # of the longest record or finite pulse
+    #: how a unit of each signal enters the n generalized loads (:func:`load_directions`): a
+    #: support acceleration along its influence vector r (as -M r), a force or moment along its
+    #: generalized force (eq. 13); None: those of the seed's plane body with the forces at ``point``
+    directions: dict[str, tuple[float, ...]] | None = None
+
+    def __post_init__(self):
+        if self.directions is None:
+            object.__setattr__(self, "directions", load_directions(PLANE, self.point))
+        if self.constant is None:
+            n = len(next(iter(self.directions.values()))) if self.directions else 0
+            object.__setattr__(self, "constant", (0.0,) * n)
+
+    @property
+    def n(self) -> int:
+        """The number of generalized loads: the body's coordinates."""
+        return len(self.constant)
 
     @property
     def has_support(self) -> bool:
@@ -77,28 +96,29 @@ class Excitation:
             nsub[inside] = np.maximum(nsub[inside], need)
         return bounds, nsub
 
-    def support(self, t: np.ndarray) -> np.ndarray:
-        """(n, 2) support acceleration, each signal's value at t (at a jump, that of its span)."""
-        out = np.zeros((len(t), 2))
-        if self.ag1 is not None:
-            out[:, 0] = self.ag1(t)
-        if self.ag2 is not None:
-            out[:, 1] = self.ag2(t)
+    def support(self, t: np.ndarray, axes=(1, 2)) -> np.ndarray:
+        """(n, len(axes)) support acceleration along the axes x_k, each signal's value at t (at a
+        jump, that of its span)."""
+        out = np.zeros((len(t), len(axes)))
+        for c, k in enumerate(axes):
+            s = self.signals.get(f"ag{k}")
+            if s is not None:
+                out[:, c] = s(t)
         return out
 
     def forces(self, t: np.ndarray) -> np.ndarray:
-        """(n, 3) the generalized external forces on the body at t, support motion left out: the
+        """(n, len(q)) the generalized external forces on the body at t, support motion left out: the
         constant load (the weight, held by the static preload) and (p1, p2, p3) (eq. 13); at a
         jump, each signal's value on its span (rows hold the pulse's side of its ends)."""
         forces = {k: s for k, s in self.signals.items() if k in FORCE_SIGNALS}
         return self._combine({k: s(t) for k, s in forces.items()}, len(t), None)
 
     def load(self, t: np.ndarray, mass: np.ndarray) -> np.ndarray:
-        """(n, 3) generalized load p = -M (ag1, ag2, 0) + (p1, p2, p3), eq. 13 for p3."""
+        """(n, len(q)) generalized load p = -M (ag1, ag2, 0) + (p1, p2, p3), eq. 13 for p3."""
         return self._combine({k: s(t) for k, s in self.signals.items()}, len(t), mass)
 
     def load_nodes(self, t: np.ndarray, h: float, mass: np.ndarray) -> np.ndarray:
-        """(n, 3) load at the nodes t (spacing h) of a compute grid that interpolates it linearly.
+        """(n, len(q)) load at the nodes t (spacing h) of a compute grid that interpolates it linearly.
 
         Records are linear between their samples and are taken at the nodes, and so is an
         analytic signal where it is smooth. Within a step of one of its breakpoints (where it
@@ -121,30 +141,35 @@ class Excitation:
         return self._combine(values, len(t), mass)
 
     def weights(self, mass: np.ndarray | None) -> dict[str, np.ndarray]:
-        """How a unit of each signal enters the generalized load: -M along its axis for a
-        support acceleration, (1, 0, -x2P), (0, 1, x1P), (0, 0, 1) for p1, p2, m3 (eq. 13)."""
-        x1p, x2p = self.point
-        out = {"p1": np.array([1.0, 0.0, -x2p]), "p2": np.array([0.0, 1.0, x1p]), "m3": np.array([0.0, 0.0, 1.0])}
-        if mass is not None:
-            out["ag1"] = np.array([-mass[0], 0.0, 0.0])
-            out["ag2"] = np.array([0.0, -mass[1], 0.0])
+        """How a unit of each signal enters the generalized load: -M r for a support acceleration
+        along the influence vector r ((-m, 0, 0) for ag1 in the plane), the generalized force of
+        a unit force or moment ((1, 0, -x2P), (0, 1, x1P), (0, 0, 1) for p1, p2, m3: eq. 13).
+        Without ``mass``, the forces only."""
+        out = {}
+        for k, r in self.directions.items():
+            if k.startswith("ag"):
+                if mass is not None:
+                    # -M r for a diagonal M, with the zeros of r kept as +0.0
+                    out[k] = np.array([-m * x if x != 0.0 else 0.0 for m, x in zip(mass, r)])
+            else:
+                out[k] = np.array(r, dtype=float)
         return out
 
     def analytic_table(self, mass: np.ndarray) -> np.ndarray:
-        """(signals, ROW_SIZE + 3): every analytic signal as a row of signals.ROW_SIZE floats and
-        its three weights into the load, for compiled code that evaluates them exactly."""
+        """(signals, ROW_SIZE + n): every analytic signal as a row of signals.ROW_SIZE floats and
+        its n weights into the load, for compiled code that evaluates them exactly."""
         w = self.weights(mass)
         rows = [s.row() + list(w[k]) for k, s in self.signals.items() if not isinstance(s, Series)]
-        return np.array(rows, dtype=float).reshape(-1, signals.ROW_SIZE + 3)
+        return np.array(rows, dtype=float).reshape(-1, signals.ROW_SIZE + self.n)
 
     def record_pieces(self, brk: np.ndarray, mass: np.ndarray) -> np.ndarray:
-        """(pieces, 2, 3) the constant load and the records' share of it at both ends of every
+        """(pieces, 2, n) the constant load and the records' share of it at both ends of every
         piece brk[k]..brk[k + 1], each end's value seen from inside the piece (a record is zero
         before its first sample and after its last: a piece outside it sees zero). The
         records are linear between their samples: with the samples among the breakpoints,
         linear pieces are exact."""
         ta, tb = brk[:-1], brk[1:]
-        out = np.empty((len(ta), 2, 3))
+        out = np.empty((len(ta), 2, self.n))
         out[:] = self.constant
         w = self.weights(mass)
         for k, s in self.signals.items():
@@ -154,11 +179,11 @@ class Excitation:
         return out
 
     def _combine(self, values: dict[str, np.ndarray], n: int, mass: np.ndarray | None) -> np.ndarray:
-        p = np.empty((n, 3))
+        p = np.empty((n, self.n))
         p[:] = self.constant
         w = self.weights(mass)
         for k, v in values.items():
-            for c in range(3):
+            for c in range(self.n):
                 if w[k][c] != 0.0:
                     p[:, c] += w[k][c] * v
         return p
@@ -166,6 +191,29 @@ class Excitation:
 
 #: the signals that act on the body as external forces (not support motion)
 FORCE_SIGNALS = ("p1", "p2", "m3")
+
+
+def load_directions(coordinates, point=(0.0, 0.0)) -> dict[str, tuple[float, ...]]:
+    """How each signal enters the generalized loads of a body with these coordinates
+    (Excitation.directions): a support acceleration ag_k along x_k moves every coordinate by its
+    influence vector r (the unit vector of the translation along x_k: the body moves with the
+    support), a force p_k at ``point`` (from G) loads q by the k-th row of the point's
+    kinematics T (u_P = T q, eqs. 7-8), p = T^T F (eq. 13), and a moment m_k the rotation about x_k."""
+    n = len(coordinates)
+    t = point_matrix(point, coordinates)
+    out = {}
+    for r, i in enumerate(translations(coordinates)):
+        k = coordinates[i].axis
+        unit = [0.0] * n
+        unit[i] = 1.0
+        out[f"ag{k}"] = tuple(unit)
+        out[f"p{k}"] = tuple(float(x) for x in t[r])
+    for j, c in enumerate(coordinates):
+        if c.rotation:
+            unit = [0.0] * n
+            unit[j] = 1.0
+            out[f"m{c.axis}"] = tuple(unit)
+    return out
 
 
 @dataclass(frozen=True)
@@ -188,18 +236,24 @@ class Damper:
     angle_deg: float
     c: float  # N s/m, each
     count: int
-    b: tuple[float, float, float]  # its deformation is b . q (eqs. 5-8), its force acts back as b f
+    b: tuple[float, ...]  # its deformation is b . q (eqs. 5-8), its force acts back as b f
 
 
 @dataclass(frozen=True)
 class System:
-    """The rigid body on its elements: M q'' + R(q) = p(t), q = (u1, u2, theta3)."""
+    """The rigid body on its elements: M q'' + C q' + R(q) = p(t) (seed eq. 11), q = (u1, u2, theta3).
+
+    What the solve layer needs of a body is here as data: the number of coordinates n (the
+    length of ``mass``), their names and units (``coordinates``), the element rows b_e (B,
+    (ne, n)), the diagonal of M, the load's directions (``excitation.directions``) and a point's
+    kinematics (:meth:`point_matrix`); no kernel assumes the plane.
+    """
 
     title: str
     body: Body
-    mass: np.ndarray  # (3,) diag(m, m, J), J about the mass centre G
+    mass: np.ndarray  # (n,) the diagonal of M: diag(m, m, J), J about the mass centre G
     # kernel rows: elements with the same b and set deform alike and are evaluated once
-    bvec: np.ndarray  # (ne, 3) rows b_e = (cos a, sin a, x1 sin a - x2 cos a)
+    bvec: np.ndarray  # (ne, n) rows b_e = (cos a, sin a, x1 sin a - x2 cos a)
     mult: np.ndarray  # (ne,) how many identical elements each row stands for
     params: np.ndarray  # (ne, 2, 8) VRM sets
     k0: np.ndarray  # (ne,) elastic stiffness of each element: the K0 of the structure-dependent methods
@@ -212,6 +266,25 @@ class System:
     weight: np.ndarray | None = None
     #: the static equilibrium under the weight (rbhyst.solve.static), once found: the run starts there
     static: object | None = None
+    #: what q is: the names and units of the coordinates and of the columns they head
+    coordinates: tuple[Coordinate, ...] = PLANE
+
+    def __post_init__(self):
+        n = len(self.mass)
+        sizes = {"coordinates": len(self.coordinates), "bvec columns": np.shape(self.bvec)[1],
+                 "excitation loads": self.excitation.n}
+        wrong = {k: v for k, v in sizes.items() if v != n}
+        if wrong:
+            raise ValueError(f"a System of {n} coordinates (mass) has {wrong}")
+
+    @property
+    def n(self) -> int:
+        """The number of generalized coordinates."""
+        return len(self.mass)
+
+    def point_matrix(self, x) -> np.ndarray:
+        """T(x) (translations, n): the motion of the body point x (m, from G) is T q (eqs. 7-8)."""
+        return point_matrix(x, self.coordinates)
 
     @property
     def K0(self) -> np.ndarray:
@@ -228,8 +301,8 @@ class System:
 
     @property
     def C(self) -> np.ndarray:
-        """Viscous damping matrix sum count c b b^T (3, 3) of the dampers (zeros without)."""
-        c = np.zeros((3, 3))
+        """Viscous damping matrix sum count c b b^T (n, n) of the dampers (zeros without)."""
+        c = np.zeros((self.n, self.n))
         for dp in self.dampers:
             b = np.asarray(dp.b)
             c += dp.count * dp.c * np.outer(b, b)
@@ -237,8 +310,8 @@ class System:
 
     @property
     def damper_b(self) -> np.ndarray:
-        """(dampers, 3) each damper's b, count expanded (CSV order)."""
-        return np.array([dp.b for dp in self.dampers for _ in range(dp.count)]).reshape(-1, 3)
+        """(dampers, n) each damper's b, count expanded (CSV order)."""
+        return np.array([dp.b for dp in self.dampers for _ in range(dp.count)]).reshape(-1, self.n)
 
     @property
     def damper_c(self) -> np.ndarray:

@@ -58,18 +58,23 @@ SPECTRA_ROWS = 500_000
 WARN_NAMES = 8
 
 
-def relative_errors(d: np.ndarray, d_ref: np.ndarray, system: System) -> tuple[float, float, float]:
-    """max_t |q - q_ref| / max_t |q_ref| per coordinate u1, u2, theta3 (``study``'s measure)."""
-    return tuple(float(x) for x in column_errors(d, d_ref, ["u1", "u2", "theta3"], ["d", "d", "d"], system))
+def relative_errors(d: np.ndarray, d_ref: np.ndarray, system: System) -> tuple[float, ...]:
+    """max_t |q - q_ref| / max_t |q_ref| per coordinate (u1, u2, theta3: ``study``'s measure)."""
+    keys = [c.key("d") for c in system.coordinates]
+    return tuple(float(x) for x in column_errors(d, d_ref, keys, ["d"] * len(keys), system))
 
 
 def _to_length(key: str, system: System) -> float:
     """What turns a column into its family's translational measure: the radius of gyration for a
-    rotation or angular acceleration, its inverse for a moment."""
-    rg = math.sqrt(system.mass[2] / system.mass[0])
-    if key in ("theta3", "alphat3"):
-        return rg
-    return 1.0 / rg if key == "R3" else 1.0
+    rotation or angular acceleration (sqrt(J / m), the rotation's mass over the first
+    translation's), its inverse for a moment."""
+    coords = system.coordinates
+    mass = next((system.mass[j] for j, c in enumerate(coords) if not c.rotation), None)
+    for j, c in enumerate(coords):
+        if c.rotation and mass is not None and key in (c.key("d"), c.key("at"), c.key("R")):
+            rg = math.sqrt(system.mass[j] / mass)
+            return 1.0 / rg if key == c.key("R") else rg
+    return 1.0
 
 
 def column_errors(values: np.ndarray, ref: np.ndarray, keys, families, system: System) -> np.ndarray:

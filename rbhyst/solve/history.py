@@ -13,14 +13,19 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from rbhyst.model.points import POINT_COLUMNS, point_columns, point_motion
+from rbhyst.model.coordinates import PLANE, columns, translations
+from rbhyst.model.points import point_columns, point_motion
 
-BASE_COLUMNS = (
-    "time_s", "u1_m", "u2_m", "theta3_rad", "v1_m_s", "v2_m_s", "omega3_rad_s",
-    "a1_m_s2", "a2_m_s2", "alpha3_rad_s2", "at1_m_s2", "at2_m_s2", "alphat3_rad_s2",
-)
+
+def base_columns(coordinates=PLANE) -> tuple[str, ...]:
+    """time, then the displacements, velocities, relative and total accelerations of q:
+    ``time_s, u1_m, u2_m, theta3_rad, v1_m_s, ..., alphat3_rad_s2`` for the plane body."""
+    return ("time_s", *(name for family in ("d", "v", "a", "at") for name in columns(coordinates, family)))
+
+
+BASE_COLUMNS = base_columns(PLANE)
 SUPPORT_COLUMNS = ("ag1_m_s2", "ag2_m_s2")
-RESULTANT_COLUMNS = ("R1_N", "R2_N", "R3_Nm")
+RESULTANT_COLUMNS = tuple(columns(PLANE, "R"))
 ENERGY_COLUMNS = ("E_input_J", "E_kinetic_J", "E_hysteretic_J", "E_error_J")
 VISCOUS_COLUMN = "E_viscous_J"
 
@@ -28,7 +33,7 @@ VISCOUS_COLUMN = "E_viscous_J"
 @dataclass
 class Raw:
     """What an integrator computed at consecutive steps: times (n,), displacements and
-    velocities (n, 3) each, element rows' deformation and force (n, rows), cumulative
+    velocities (n, len(q)) each, element rows' deformation and force (n, rows), cumulative
     energies (n, 4): input, kinetic, hysteretic, viscous. Accelerations are not an
     integrator's to report: :class:`Layout` takes them from the equation of motion."""
 
@@ -51,20 +56,27 @@ class Layout:
         """points: (name, (x1, x2) in the deck's frame) of each point of interest (output.points)."""
         self.system = system
         ex = system.excitation
+        coords = getattr(system, "coordinates", PLANE)
+        n = len(coords)
         self.has_support = ex.has_support
         self.damped = bool(system.dampers)
-        names = list(BASE_COLUMNS)
-        self.slices: dict[str, slice] = {"d": slice(1, 4), "v": slice(4, 7), "a": slice(7, 10), "at": slice(10, 13)}
+        names = list(base_columns(coords))
+        self.slices: dict[str, slice] = {family: slice(1 + k * n, 1 + (k + 1) * n)
+                                         for k, family in enumerate(("d", "v", "a", "at"))}
+        # the translations of q: the directions a support moves and a point has
+        self._moving = translations(coords)
         if self.has_support:
-            self.slices["ag"] = slice(len(names), len(names) + 2)
-            names += SUPPORT_COLUMNS
-        self.slices["R"] = slice(len(names), len(names) + 3)
-        names += RESULTANT_COLUMNS
+            self._axes = tuple(coords[i].axis for i in self._moving)
+            self.slices["ag"] = slice(len(names), len(names) + len(self._axes))
+            names += [f"ag{k}_m_s2" for k in self._axes]
+        self.slices["R"] = slice(len(names), len(names) + n)
+        names += columns(coords, "R")
         g = np.asarray(system.body.mass_centre, dtype=float)
         self.points = tuple((name, np.asarray(p, dtype=float) - g) for name, p in points)  # x from G
-        self.slices["points"] = slice(len(names), len(names) + len(POINT_COLUMNS) * len(self.points))
+        self._point_width = 2 * len(self._moving)
+        self.slices["points"] = slice(len(names), len(names) + self._point_width * len(self.points))
         for name, _ in self.points:
-            names += point_columns(name)
+            names += point_columns(name, coords)
         n_el = system.n_output_elements
         self.slices["elements"] = slice(len(names), len(names) + 2 * n_el)
         for k in range(1, n_el + 1):
@@ -74,16 +86,17 @@ class Layout:
             self.slices["dampers"] = slice(len(names), len(names) + 2 * n_d)
             for k in range(1, n_d + 1):
                 names += [f"d{k}_v_m_s", f"d{k}_f_N"]
-            self._db = system.damper_b.T.copy()  # (3, dampers): deformation rates v . b
+            self._db = system.damper_b.T.copy()  # (n, dampers): deformation rates v . b
             self._dc = system.damper_c
         # displacements are measured from the static equilibrium under gravity (seed section 2.2)
-        self.origin = np.zeros(3) if getattr(system, "static", None) is None else system.static.q
+        self.origin = np.zeros(n) if getattr(system, "static", None) is None else system.static.q
         energy = list(ENERGY_COLUMNS)
         if self.damped:
             energy.insert(3, VISCOUS_COLUMN)
         self.slices["energy"] = slice(len(names), len(names) + len(energy))
         names += energy
         self.names = tuple(names)
+        self.coordinates = coords
         self._expand = np.array([el.row for el in system.elements for _ in range(el.count)], dtype=int)
         self._rb = system.bvec * system.mult[:, None]  # rows' share of R = sum mult b f
         self._minv = 1.0 / np.asarray(system.mass, dtype=float)
@@ -99,8 +112,8 @@ class Layout:
         if out is None:
             out = np.empty((len(self.names), n)).T  # column by column: each written contiguously
         out[:, 0] = raw.t
-        out[:, 1:4] = raw.d - self.origin
-        out[:, 4:7] = raw.v
+        out[:, self.slices["d"]] = raw.d - self.origin
+        out[:, self.slices["v"]] = raw.v
         r = out[:, self.slices["R"]]
         r[:] = raw.f @ self._rb
         # the total acceleration from the equation of motion at the row's own state and time:
@@ -108,20 +121,23 @@ class Layout:
         # continuous where the support acceleration jumps; a jump of an external force: the row
         # holds the force's value on its span). Not the integrator's own acceleration, which
         # near a jump or a kink carries the load averaged over a step.
-        at = out[:, 10:13]
+        at = out[:, self.slices["at"]]
         at[:] = self.system.excitation.forces(raw.t) - r
         if self.damped:
             at -= raw.v @ self._ct
         at *= self._minv
-        out[:, 7:10] = at
+        rel = out[:, self.slices["a"]]
+        rel[:] = at
         if self.has_support:
-            ag = self.system.excitation.support(raw.t)
-            out[:, 7:9] -= ag
+            ag = self.system.excitation.support(raw.t, self._axes)
+            for c, i in enumerate(self._moving):
+                rel[:, i] -= ag[:, c]
             out[:, self.slices["ag"]] = ag
         first = self.slices["points"].start
         for k, (_, x) in enumerate(self.points):
-            c = first + len(POINT_COLUMNS) * k
-            point_motion(out[:, 1:4], out[:, 10:13], x, out=out[:, c:c + len(POINT_COLUMNS)])
+            c = first + self._point_width * k
+            point_motion(out[:, self.slices["d"]], at, x, out=out[:, c:c + self._point_width],
+                         coordinates=self.coordinates)
         el = self.slices["elements"]
         out[:, el.start:el.stop:2] = raw.u[:, self._expand]
         out[:, el.start + 1:el.stop:2] = raw.f[:, self._expand]
@@ -142,12 +158,14 @@ class Layout:
 
 def body_spectrum_columns(layout: Layout) -> list[tuple[tuple[str, str], int]]:
     """((location, direction), column) of every total acceleration of the body whose spectra a
-    run gives: G and every point along x1 and x2 (the ground's come from its signals)."""
+    run gives: G and every point along each translation of q, x1 and x2 in the plane (the
+    ground's come from its signals)."""
     from rbhyst.solve.located import CENTRE
 
-    out = [((CENTRE, f"x{k}"), layout.index(f"at{k}_m_s2")) for k in (1, 2)]
+    moving = [layout.coordinates[i] for i in translations(layout.coordinates)]
+    out = [((CENTRE, f"x{c.axis}"), layout.index(c.column("at"))) for c in moving]
     for name, _ in layout.points:
-        out += [((name, f"x{k}"), layout.index(f"{name}_at{k}_m_s2")) for k in (1, 2)]
+        out += [((name, f"x{c.axis}"), layout.index(f"{name}_{c.column('at')}")) for c in moving]
     return out
 
 
@@ -254,14 +272,11 @@ def estimate_columns(layout: Layout) -> list[tuple[str, int, str]]:
     The key is the CSV column without its unit (``at1``, ``R3``, ``e3_f``, ``top_at2``); the
     family groups the columns whose scale is shared where one of them is at rest."""
     index = {name: i for i, name in enumerate(layout.names)}
-    out = [(k, index[f"{k}_{unit}"], fam) for fam, pairs in (
-        ("d", (("u1", "m"), ("u2", "m"), ("theta3", "rad"))),
-        ("at", (("at1", "m_s2"), ("at2", "m_s2"), ("alphat3", "rad_s2"))),
-        ("R", (("R1", "N"), ("R2", "N"), ("R3", "Nm")))) for k, unit in pairs]
+    out = [(c.key(fam), index[c.column(fam)], fam) for fam in ("d", "at", "R") for c in layout.coordinates]
+    moving = [layout.coordinates[i] for i in translations(layout.coordinates)]
     for name, _ in layout.points:
-        out += [(f"{name}_{k}", index[f"{name}_{k}_{unit}"], fam)
-                for k, unit, fam in (("u1", "m", "pd"), ("u2", "m", "pd"), ("at1", "m_s2", "pat"),
-                                     ("at2", "m_s2", "pat"))]
+        out += [(f"{name}_{c.key(fam)}", index[f"{name}_{c.column(fam)}"], "p" + fam)
+                for fam in ("d", "at") for c in moving]
     n_el = layout.system.n_output_elements
     out += [(f"e{k}_f", index[f"e{k}_f_N"], "ef") for k in range(1, n_el + 1)]
     return out

@@ -16,7 +16,7 @@ from rbhyst.solve import integrators
 from rbhyst.solve.kernels import layout as kernels
 from rbhyst.errors import AnalysisError, InputError, byte_size
 from rbhyst.solve.history import Extremes, Layout, PlotData, Raw, body_spectrum_columns, estimate_columns
-from rbhyst.solve.kernels.layout import N_STATE, N_X, X_A, X_CUR, X_D, X_ITER, X_LEVEL_USED, X_OMEGA_DT2, X_STEPS, X_SUBSTEPS
+from rbhyst.solve.kernels.layout import N_STATE, N_W, X_CUR, X_ITER, X_LEVEL_USED, X_OMEGA_DT2, X_STEPS, X_SUBSTEPS, n_x, x_slice
 from rbhyst.model.system import System
 from rbhyst.solve.result import Result, RunStats
 from rbhyst.solve.static import at_rest_under_gravity
@@ -133,7 +133,8 @@ class Rows:
 
 
 def simulate(system: System, s: Settings, keep: bool = True, csv=None) -> Result:
-    """Integrate M q'' + R(q) = p(t) from rest with the chosen method (seed eq. 11).
+    """Integrate M q'' + C q' + R(q) = p(t) from rest with the chosen method (seed eq. 11), for a
+    body of any number of coordinates (system.n).
 
     keep: hold the written rows in memory (Result.table); csv: stream them to the writer it
     opens (see :class:`Rows`).
@@ -248,17 +249,17 @@ class _FixedStepPlan(Plan):
         self.wgt = (self.bvec * self.bvec) @ self.minv
         ne = self.bvec.shape[0]
         self.layout = Layout(system, s.points)
-        self.chunk = min(_chunk_rows(ne, len(self.layout.names), self.nsub), self.n_steps)
+        self.chunk = min(_chunk_rows(ne, system.n, len(self.layout.names), self.nsub), self.n_steps)
         # load (or compile) the kernel
         nsub = next(iter(self.coef))
-        self._call(np.zeros((1, 3)), 0.0, nsub, s.dt / nsub, nsub, 0, *self._state(), _Buffers(1, ne))
+        self._call(np.zeros((1, system.n)), 0.0, nsub, s.dt / nsub, nsub, 0, *self._state(), _Buffers(1, ne, system.n))
 
     def _state(self):
         """The loop's state at t = 0: at rest, elements virgin, and the initial acceleration."""
         from rbhyst.model.hysteresis import virgin_tangent
 
-        ne = self.bvec.shape[0]
-        x = np.zeros(N_X)
+        ne, n = self.bvec.shape
+        x = np.zeros(n_x(n))
         st = np.zeros((2, ne, N_STATE))
         # virgin elements: u = f = 0 and no branch yet (S = 0), so the first move starts a branch
         # whatever its direction; until it moves, an element's tangent is the stiffer of its two
@@ -269,9 +270,9 @@ class _FixedStepPlan(Plan):
         static = self.system.static
         if static is not None:  # at rest at the static equilibrium under gravity, its branches as the path left them
             st[0] = static.st
-            x[X_D:X_D + 3] = static.q
+            x[x_slice(n, 0)] = static.q
             p0 = p0 - static.r
-        x[X_A:X_A + 3] = self.minv * p0  # equilibrium at t = 0: records rarely start at zero
+        x[x_slice(n, 2)] = self.minv * p0  # equilibrium at t = 0: records rarely start at zero
         x[X_CUR] = 0
         return x, st
 
@@ -281,13 +282,17 @@ class _FixedStepPlan(Plan):
         from rbhyst.solve.kernels.compiled import kernel
 
         s = self.settings
-        ne = self.bvec.shape[0]
+        ne, n_q = self.bvec.shape
         self.info = np.zeros(kernels.INFO_SIZE)
-        return kernel("run_chunk")(self.method.kernel_id, self.coef[nsub], self.system.mass, self.minv, self.cm, self.damped,
-                                   self.bvec, self.system.mult, self.params, self.wgt, load,
-                                   t0, h_c, rows_every, n, s.max_omega_dt, self.level0[nsub], s.max_substep_level,
-                                   s.newton_tol, s.newton_max_iter, x, st, np.zeros((ne, N_STATE)), np.zeros((ne, 2)),
-                                   buf.d, buf.v, buf.u, buf.f, buf.e, self.info)
+        # M and M^-1 as tuples: their length n is then a constant of the compiled loop (one
+        # compilation per n), which unrolls every loop over the coordinates
+        return kernel("run_chunk", n_q)(self.method.kernel_id, self.coef[nsub], tuple(self.system.mass), tuple(self.minv),
+                                        self.cm, self.damped,
+                                        self.bvec, self.system.mult, self.params, self.wgt, load,
+                                        t0, h_c, rows_every, n, s.max_omega_dt, self.level0[nsub], s.max_substep_level,
+                                        s.newton_tol, s.newton_max_iter, x, st, np.zeros((ne, N_STATE)), np.zeros((ne, 2)),
+                                        np.zeros((N_W, n_q)), np.zeros((n_q, n_q)), buf.d, buf.v, buf.u, buf.f, buf.e,
+                                        self.info)
 
     def segments(self, fine: bool = False):
         """(first output step, steps, substeps each): runs of equal splitting, at most a chunk of
@@ -299,12 +304,12 @@ class _FixedStepPlan(Plan):
 
     def run(self, keep: bool = True, csv=None, compare_every: int | None = None, progress=None) -> Result:
         system, s = self.system, self.settings
-        ne = self.bvec.shape[0]
+        ne, n = self.bvec.shape
         x, st = self._state()
-        buf = _Buffers(self.chunk, ne)
+        buf = _Buffers(self.chunk, ne, n)
         rows = Rows(self.layout, self.n_steps, s.every, keep, csv, spectra=s.spectra, dt=s.dt,
                     compare_every=compare_every)
-        start_row = Raw(t=np.zeros(1), d=x[None, X_D:X_D + 3].copy(), v=np.zeros((1, 3)),
+        start_row = Raw(t=np.zeros(1), d=x[None, x_slice(n, 0)].copy(), v=np.zeros((1, n)),
                         u=st[None, 0, :, kernels.U].copy(), f=st[None, 0, :, kernels.F].copy(),
                         e=np.zeros((1, kernels.N_E)))
         # the spectra see every compute step where the excitation is split (a short pulse's
@@ -343,12 +348,12 @@ class _FixedStepPlan(Plan):
 class _Buffers:
     """One chunk of the loop's output rows."""
 
-    def __init__(self, n: int, ne: int):
-        self.d = np.empty((n, 3))
-        self.v = np.empty((n, 3))
-        self.u = np.empty((n, ne))
-        self.f = np.empty((n, ne))
-        self.e = np.empty((n, kernels.N_E))
+    def __init__(self, rows: int, ne: int, n: int):
+        self.d = np.empty((rows, n))
+        self.v = np.empty((rows, n))
+        self.u = np.empty((rows, ne))
+        self.f = np.empty((rows, ne))
+        self.e = np.empty((rows, kernels.N_E))
 
 
 def run_spectra(system: System, s: Settings, body):
@@ -362,9 +367,9 @@ def run_spectra(system: System, s: Settings, body):
     return ground_spectra(system.excitation, n_steps * s.dt, *s.spectra).joined(body)
 
 
-def _chunk_rows(ne: int, n_cols: int, nsub: int) -> int:
+def _chunk_rows(ne: int, n: int, n_cols: int, nsub: int) -> int:
     """Output steps per chunk: CHUNK_BYTES of raw rows, table rows and load."""
-    per_row = 8 * (9 + 2 * ne + kernels.N_E + n_cols + 3 * nsub)
+    per_row = 8 * (3 * n + 2 * ne + kernels.N_E + n_cols + n * nsub)
     return int(min(65_536, max(64, CHUNK_BYTES // per_row)))
 
 

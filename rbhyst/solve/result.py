@@ -66,8 +66,8 @@ class Result:
 
     @property
     def q_sample(self) -> np.ndarray:
-        """(n, 4) time, u1, u2, theta3 at the steps the estimate compares."""
-        return self.compared[:, :4]
+        """(n, 1 + len(q)) time and q (u1, u2, theta3) at the steps the estimate compares."""
+        return self.compared[:, :1 + self.system.n]
 
     # ---------------------------------------------------------------- the table by name
 
@@ -88,7 +88,7 @@ class Result:
 
     @property
     def d(self) -> np.ndarray:
-        """(n, 3) u1, u2, theta3 relative to the support."""
+        """(n, len(q)) u1, u2, theta3 relative to the support."""
         return self._group("d")
 
     @property
@@ -208,7 +208,7 @@ class Result:
         st = self.system.static
         u = self.system.expand(st.st[None, :, 0])[0]
         f = self.system.expand(st.st[None, :, 1])[0]
-        return {"u1_m": float(st.q[0]), "u2_m": float(st.q[1]), "theta3_rad": float(st.q[2]),
+        return {**{c.column("d"): float(q) for c, q in zip(self.system.coordinates, st.q)},
                 "elements": [{"u_m": float(a), "f_N": float(b)} for a, b in zip(u, f)],
                 "out_of_balance": st.residual, "iterations": st.iterations,
                 "note": "displacements in time_history.csv are measured from here; element deformations are total"}

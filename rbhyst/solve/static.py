@@ -1,6 +1,6 @@
 """The static equilibrium under gravity, reached along the elements' branches from their virgin state.
 
-The weight W = m (g1, g2, 0) acts at G. It is applied in increments of W / INCREMENTS; at each,
+The weight W (m (g1, g2, 0) in the plane: a generalized load, one entry per coordinate) acts at G. It is applied in increments of W / INCREMENTS; at each,
 Newton iterations with the elements' closed-form tangents (seed eq. 16) solve R(q) = lambda W,
 every element advancing along its VRM branch from where the previous increment left it (eq. 14
 from the committed state): a quasi-static path with no dynamic drop, exact for the VRM up to the
@@ -25,9 +25,9 @@ TOLERANCE = 1e-13
 
 @dataclass(frozen=True)
 class Static:
-    q: np.ndarray  # (3,) u1, u2, theta3 of G at equilibrium, from the virgin state
+    q: np.ndarray  # (n,) the coordinates of G at equilibrium (u1, u2, theta3), from the virgin state
     st: np.ndarray  # (rows, 6) element-row states there (U, F, S, G, K, A)
-    r: np.ndarray  # (3,) the elements' resultant there: the load that holds the body at rest
+    r: np.ndarray  # (n,) the elements' resultant there: the load that holds the body at rest
     residual: float  # |W - R| / |W|
     iterations: int
 
@@ -42,24 +42,24 @@ def static_equilibrium(system) -> Static:
     bvec = np.ascontiguousarray(system.bvec)
     params = np.ascontiguousarray(system.params)
     mult = system.mult
-    ne = bvec.shape[0]
+    ne, n = bvec.shape
     st = np.zeros((2, ne, kernels.N_STATE))
     for e in range(ne):
         st[0, e, kernels.K] = max(virgin_tangent(params[e], 1.0), virgin_tangent(params[e], -1.0))
     kpeak = np.zeros((ne, 2))
     cur = 0
-    q = np.zeros(3)
+    q = np.zeros(n)
     scale = max(float(np.max(np.abs(w))), 1e-300)
     total = 0
-    r = np.zeros(3)
+    r = np.zeros(n)
     for k in range(1, INCREMENTS + 1):
         target = w * (k / INCREMENTS)
         for it in range(MAX_ITERATIONS):
-            ok, bad, _, r0, r1, r2 = update_elements(bvec, mult, params, q[0], q[1], q[2], st, cur, kpeak)
+            r = np.zeros(n)
+            ok, bad, _ = update_elements(bvec, mult, params, q, st, cur, kpeak, r, n)
             if not ok:
                 raise AnalysisError(f"static equilibrium under gravity: element row {bad + 1} left its calibrated "
                                     "range (exp overflow): the elements cannot carry the weight")
-            r = np.array([r0, r1, r2])
             res = target - r
             total += 1
             if np.max(np.abs(res)) <= TOLERANCE * scale:
@@ -68,7 +68,7 @@ def static_equilibrium(system) -> Static:
             try:
                 dq = np.linalg.solve(kt, res)
             except np.linalg.LinAlgError:
-                dq = np.full(3, np.nan)
+                dq = np.full(n, np.nan)
             if not np.all(np.isfinite(dq)):
                 raise AnalysisError(f"static equilibrium under gravity: at {k / INCREMENTS:.0%} of the weight the "
                                     "elements' tangent stiffness is singular: they cannot carry it")

@@ -1,7 +1,9 @@
 """Integrators: one module per method, one registry name -> :class:`Method`.
 
 A fixed-step method names its step in the compiled loop (``kernel_id``) and
-builds that step's 3x3 coefficient matrices for a step h (``coefficients``).
+builds that step's n x n coefficient matrices for a step h (``coefficients``), n the
+body's number of coordinates: every constant matrix a step needs, inverted here once per
+substep level, so that the compiled step only multiplies.
 A method with a solver of its own (the reference) gives ``solve`` instead.
 """
 
@@ -27,7 +29,7 @@ class Method:
     kernel_id: int | None = None
     #: the step depends on K0 (Chang, Chen-Ricles, KR-alpha): omega_0 h must stay resolved
     structure_dependent: bool = False
-    #: (mass (3,), K0 (3, 3), C (3, 3), h) -> (N_COEF, 3, 3)
+    #: (mass (n,), K0 (n, n), C (n, n), h) -> (N_COEF, n, n)
     coefficients: Callable[[np.ndarray, np.ndarray, np.ndarray, float], np.ndarray] | None = None
     #: (system, settings, keep=, csv=) -> Result, for methods outside the fixed-step loop
     solve: Callable | None = None

@@ -18,9 +18,10 @@ KERNEL_ID = 1
 
 
 def coefficients(mass: np.ndarray, k0: np.ndarray, c: np.ndarray, h: float) -> np.ndarray:
-    out = np.zeros((N_COEF, 3, 3))
-    out[B1] = np.eye(3)
-    out[B2] = 0.5 * np.eye(3)
+    eye = np.eye(len(mass))
+    out = np.zeros((N_COEF, len(mass), len(mass)))
+    out[B1] = eye
+    out[B2] = 0.5 * eye
     out[MC_INV] = np.linalg.inv(np.diag(mass) + 0.5 * h * c)
     return out
 

@@ -28,7 +28,7 @@ def coefficients(mass: np.ndarray, k0: np.ndarray, c: np.ndarray, h: float) -> n
     m = np.diag(mass)
     mc = m + 0.5 * h * c
     d = mc + 0.25 * h * h * k0
-    out = np.zeros((N_COEF, 3, 3))
+    out = np.zeros((N_COEF, len(mass), len(mass)))
     out[B1] = np.linalg.solve(d, mc)
     out[B2] = 0.5 * np.linalg.solve(d, m)
     out[MC_INV] = np.linalg.inv(mc)

@@ -68,13 +68,13 @@ def coefficients(mass: np.ndarray, k0: np.ndarray, c: np.ndarray, h: float, rho_
     """
     am, af, gamma, beta = parameters(rho_inf)
     m = np.diag(mass)
-    eye = np.eye(3)
+    eye = np.eye(len(mass))
     big_a = m + gamma * h * c + beta * h * h * k0
     a1 = np.linalg.solve(big_a, m)
     a2 = (0.5 + gamma) * a1
     a3 = np.linalg.solve(big_a, am * m + af * gamma * h * c + af * beta * h * h * k0)
     mh_inv = np.linalg.inv(m @ (eye - a3) + (1.0 - af) * gamma * h * c)
-    out = np.zeros((N_COEF, 3, 3))
+    out = np.zeros((N_COEF, len(mass), len(mass)))
     out[V_A] = a1 - gamma * eye
     out[D_A] = a2 - gamma * eye
     out[A_A] = mh_inv @ (m @ a3 + (1.0 - af) * h * c @ (a1 - gamma * eye))

@@ -14,7 +14,7 @@ Order 2. Unconditionally stable for linear systems and for any softening tangent
 energy conserving on linear systems (no numerical dissipation, period elongation
 of order (omega dt)^2 / 12). Its stability does not rest on K0, so there is no
 omega_0 dt limit; the loop's stiffness monitor (omega_max dt <= max_omega_dt) still
-applies, as an accuracy limit. About three element evaluations and three 3x3
+applies, as an accuracy limit. About three element evaluations and three n x n
 solves per step: some 3-4 times the cost of an explicit step.
 """
 
@@ -31,7 +31,7 @@ ROUNDOFF2 = (8.0 * 2.220446049250313e-16) ** 2
 
 def coefficients(mass: np.ndarray, k0: np.ndarray, c: np.ndarray, h: float) -> np.ndarray:
     """Unused by the step (it needs only M, C and h): zeros of the loop's shape."""
-    return np.zeros((N_COEF, 3, 3))
+    return np.zeros((N_COEF, len(mass), len(mass)))
 
 
 METHOD = Method(

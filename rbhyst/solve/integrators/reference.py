@@ -4,7 +4,9 @@ Between two reversals every element stays on one branch (s, u_P, g_P), so its fo
 f(u) = c_s(u) - g_P exp(-s alpha (u - u_P)) is a smooth closed form (seed eq. 14) and
 the equation of motion is an ordinary smooth ODE in (q, v):
 
-    q' = v,  M v' = p(t) - sum mult b f(b . q),  E_in' = p . v.
+    q' = v,  M v' = p(t) - sum mult b f(b . q) - C v,  E_in' = p . v  (seed eq. 11)
+
+for a body of any number n of coordinates (the state is 2 n + 2 values).
 
 It is integrated with DOP853 (Dormand and Prince's 8(5,3) pair with its 7th-order
 dense output, Hairer, Norsett and Wanner, Solving ODEs I, II.10; the coefficient
@@ -38,7 +40,7 @@ import numpy as np
 from rbhyst.solve.integrators import dop853_tableau as _dop
 from rbhyst.errors import AnalysisError
 from rbhyst.solve.kernels.compiled import kernel
-from rbhyst.solve.kernels.dop853_layout import (NS, NY, R_ELEMENT, R_EVENTS, R_FEV, R_HMAX, R_HMIN, R_INFO, R_REJECTED, R_START_FLIPS, R_STATUS, R_STEPS, R_TIME, ST_NONFINITE, ST_OK, ST_OVERFLOW, ST_STEP_TOO_SMALL, ST_TOO_MANY_STEPS)
+from rbhyst.solve.kernels.dop853_layout import (NS, R_ELEMENT, R_EVENTS, R_FEV, R_HMAX, R_HMIN, R_INFO, R_REJECTED, R_START_FLIPS, R_STATUS, R_STEPS, R_TIME, ST_NONFINITE, ST_OK, ST_OVERFLOW, ST_STEP_TOO_SMALL, ST_TOO_MANY_STEPS, ny)
 from rbhyst.model.records import Series
 from rbhyst.model.signals import SINE
 from rbhyst.solve.history import Layout, Raw
@@ -64,9 +66,9 @@ _D = np.ascontiguousarray(_dop.D, dtype=float)
 
 @dataclass(frozen=True)
 class Pieces:
-    """The load as the kernel evaluates it: breakpoints (n + 1,), the records' share (with the
-    constant load) at both ends of each piece (n, 2, 3), and the analytic signals' table
-    (signals, ROW_SIZE + 3) evaluated exactly at every time the kernel asks; ``signals``: those
+    """The load as the kernel evaluates it: breakpoints (k + 1,), the records' share (with the
+    constant load) at both ends of each piece (k, 2, n), and the analytic signals' table
+    (signals, ROW_SIZE + n) evaluated exactly at every time the kernel asks; ``signals``: those
     signals and their weights into the load, for the same evaluation in Python."""
 
     brk: np.ndarray
@@ -75,7 +77,7 @@ class Pieces:
     signals: tuple = ()
 
     def at(self, t: np.ndarray) -> np.ndarray:
-        """(n, 3) the load at times t, as the kernel sees it (a jump at a breakpoint: its right side)."""
+        """(len(t), n) the load at times t, as the kernel sees it (a jump at a breakpoint: its right side)."""
         t = np.asarray(t, dtype=float)
         k = np.clip(np.searchsorted(self.brk, t, side="right") - 1, 0, len(self.brk) - 2)
         ta, tb = self.brk[k], self.brk[k + 1]
@@ -130,17 +132,22 @@ def _load_samples(pieces: Pieces, per_piece: int = 4, most: int = 200_000) -> np
 
 
 def _scales(system, pieces: Pieces, rtol):
-    """atol for (q, v): rtol x the quasi-static response to the load with the reversal stiffness."""
+    """atol for (q, v): rtol x the quasi-static response to the load with the reversal stiffness;
+    a rotation's at the radius of gyration sqrt(J / m) (J: its mass, m: the first translation's)."""
     kr = (system.bvec.T * (system.mult * system.k_reversal)) @ system.bvec
     p = _load_samples(pieces)
     static = np.linalg.solve(kr, p.T).T
-    rg = math.sqrt(system.mass[2] / system.mass[0])
-    length = max(float(np.max(np.abs(static[:, :2]))), float(np.max(np.abs(static[:, 2]))) * rg)
+    spin = np.array([c.rotation for c in system.coordinates])
+    m_t = system.mass[np.argmin(spin)] if not spin.all() else 1.0
+    # lengths per unit of each coordinate: 1 for a translation, the radius of gyration for a rotation
+    rg = np.where(spin, np.sqrt(system.mass / m_t), 1.0)
+    length = max(float(np.max(np.abs(static[:, ~spin]), initial=0.0)),
+                 float(np.max(np.abs(static[:, spin]) * rg[spin], initial=0.0)))
     if not length > 0.0:
         length = 1e-6
     m = 1.0 / np.sqrt(system.mass)
     w1 = math.sqrt(max(float(np.min(np.linalg.eigvalsh(kr * np.outer(m, m)))), 0.0)) or 1.0
-    q = rtol * length * np.array([1.0, 1.0, 1.0 / rg])
+    q = rtol * length * np.where(spin, 1.0 / rg, 1.0)
     return np.concatenate([q, q * w1, [0.0]]), length, w1
 
 
@@ -154,7 +161,7 @@ def _initial_state(system, pieces: Pieces):
     init = np.zeros((4, len(s0)))
     init[0] = s0
     init[2] = np.nan
-    y0 = np.zeros(3)
+    y0 = np.zeros(system.n)
     static = getattr(system, "static", None)
     if static is not None:
         y0 = static.q.copy()
@@ -193,20 +200,26 @@ class Solution:
     element rows' deformation and force, hysteretic work."""
 
     t: np.ndarray
-    y: np.ndarray  # (n, NY)
+    y: np.ndarray  # (rows, 2 n + 2): q, v, input energy, viscous work
     eu: np.ndarray
     ef: np.ndarray
     eh: np.ndarray
     stats: dict
 
     @property
+    def n(self) -> int:
+        """The body's number of coordinates."""
+        return (self.y.shape[1] - 2) // 2
+
+    @property
     def q(self) -> np.ndarray:
-        return self.y[:, :3]
+        return self.y[:, :self.n]
 
     def raw(self, system) -> Raw:
         """The rows as a run's table takes them (rbhyst.solve.history)."""
-        v = self.y[:, 3:6]
-        energy = np.column_stack([self.y[:, 6], 0.5 * (v * v) @ system.mass, self.eh, self.y[:, 7]])
+        n = self.n
+        v = self.y[:, n:2 * n]
+        energy = np.column_stack([self.y[:, 2 * n], 0.5 * (v * v) @ system.mass, self.eh, self.y[:, 2 * n + 1]])
         return Raw(t=self.t, d=self.q, v=v, u=self.eu, f=self.ef, e=energy)
 
 
@@ -223,19 +236,22 @@ def integrate(system, t_out: np.ndarray, rtol: float = RTOL, pieces=None, max_st
     pieces = pieces if pieces is not None else load_pieces(system, t_end)
     brk, coef, sig = pieces.brk, pieces.ends, pieces.analytic
     atol, length, w1 = _scales(system, pieces, rtol)
-    ne = system.bvec.shape[0]
+    ne, n = system.bvec.shape
+    width = ny(n)
     init, y0 = _initial_state(system, pieces)
-    out_y = np.zeros((n_rows, NY))
+    out_y = np.zeros((n_rows, width))
     out_eu = np.zeros((n_rows, ne))
     out_ef = np.zeros((n_rows, ne))
     out_eh = np.zeros(n_rows)
     info = np.zeros(R_INFO)
-    minv = 1.0 / system.mass
+    # M^-1 as a tuple: its length n is a constant of the compiled kernel (one compilation per n)
+    minv = tuple(1.0 / system.mass)
     args = (minv, np.ascontiguousarray(system.bvec), system.mult, np.ascontiguousarray(system.params),
             np.ascontiguousarray(system.C))
-    work = (np.zeros((6, ne)), np.zeros((7, NY)), np.zeros((16, NY)), np.zeros((7, NY)), np.zeros(3), np.zeros(NS + 1))
+    work = (np.zeros((6, ne)), np.zeros((7, width)), np.zeros((16, width)), np.zeros((7, width)), np.zeros((3, n)),
+            np.zeros(NS + 1))
     tail = (rtol, atol, init, y0, 1e-6, int(max_steps), _A, _B, _C, _E3, _E5, _D, out_y, out_eu, out_ef, out_eh, info, *work)
-    _integrate = kernel("integrate")
+    _integrate = kernel("integrate", n)
     # compile (or load) before the clock starts, on a one-piece problem
     _integrate(*args, brk[:2].copy(), coef[:1].copy(), sig, t_out[:1].copy(), *tail)
     info[:] = 0.0
@@ -258,8 +274,8 @@ def integrate(system, t_out: np.ndarray, rtol: float = RTOL, pieces=None, max_st
         "method": "DOP853: explicit Runge-Kutta 8(5,3) with 7th-order dense output (Hairer-Norsett-Wanner), "
                   "compiled with numba",
         "rtol": rtol,
-        "atol_q": atol[:3].tolist(),
-        "atol_v": atol[3:6].tolist(),
+        "atol_q": atol[:n].tolist(),
+        "atol_v": atol[n:2 * n].tolist(),
         "atol_basis": {"displacement_scale_m": length, "lowest_circular_frequency_rad_s": w1},
         "events": "reversals: element velocity b.v crossing zero against its branch, located on the dense "
                   "output and stepped to exactly; load breakpoints: record samples (linear between them), the "

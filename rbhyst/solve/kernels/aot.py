@@ -24,17 +24,22 @@ SOURCES = ("model/hysteresis.py", "model/vrm.py", "model/signals.py", "solve/ker
            "solve/integrators/chang.py", "solve/integrators/central_difference.py", "solve/integrators/kr_alpha.py",
            "solve/integrators/newmark.py")
 
-#: name -> (module, function, signature)
+#: the numbers of coordinates a kernel whose signature says {n} is built for (one export each,
+#: ``name_n3``): the seed's plane body; a body of another n runs the JIT kernels
+SIZES = (3,)
+
+#: name -> (module, function, signature); {n}: the number of coordinates (M and M^-1 are tuples
+#: of n, so that n is a compile-time constant: see rbhyst.solve.integrators.steps)
 EXPORTS = {
     "run_chunk": ("rbhyst.solve.kernels.loop", "run_chunk",
-                  "i8(i8, f8[:,:,:,::1], f8[::1], f8[::1], f8[:,::1], b1, f8[:,::1], f8[::1], f8[:,:,::1], "
+                  "i8(i8, f8[:,:,:,::1], UniTuple(f8, {n}), UniTuple(f8, {n}), f8[:,::1], b1, f8[:,::1], f8[::1], f8[:,:,::1], "
                   "f8[::1], f8[:,::1], f8, f8, i8, i8, f8, i8, i8, f8, i8, f8[::1], f8[:,:,::1], f8[:,::1], "
-                  "f8[:,::1], f8[:,::1], f8[:,::1], f8[:,::1], f8[:,::1], f8[:,::1], f8[::1])"),
+                  "f8[:,::1], f8[:,::1], f8[:,::1], f8[:,::1], f8[:,::1], f8[:,::1], f8[:,::1], f8[:,::1], f8[::1])"),
     "integrate": ("rbhyst.solve.kernels.dop853", "_integrate",
-                  "i8(f8[::1], f8[:,::1], f8[::1], f8[:,:,::1], f8[:,::1], f8[::1], f8[:,:,::1], f8[:,::1], "
+                  "i8(UniTuple(f8, {n}), f8[:,::1], f8[::1], f8[:,:,::1], f8[:,::1], f8[::1], f8[:,:,::1], f8[:,::1], "
                   "f8[::1], f8, f8[::1], f8[:,::1], f8[::1], f8, i8, f8[:,::1], f8[::1], f8[::1], f8[::1], "
                   "f8[::1], f8[:,::1], f8[:,::1], f8[:,::1], f8[:,::1], f8[::1], f8[::1], f8[:,::1], "
-                  "f8[:,::1], f8[:,::1], f8[:,::1], f8[::1], f8[::1])"),
+                  "f8[:,::1], f8[:,::1], f8[:,::1], f8[:,::1], f8[::1])"),
     "decompose": ("rbhyst.solve.kernels.csvfmt", "_decompose",
                   "i8(f8[:,::1], i8[:,::1], i8[:,::1], i1[:,::1], f8[::1])"),
     "render": ("rbhyst.solve.kernels.csvfmt", "_render", "i8(f8[:,::1], i8[:,::1], i8[:,::1], i1[:,::1], u1[::1], i8[::1])"),
@@ -42,6 +47,13 @@ EXPORTS = {
                     "void(f8[:,:], i8, i8, f8[::1], f8[::1], f8[::1], f8[::1], f8[:,::1], f8[:,::1], "
                     "f8[::1], f8[::1])"),
 }
+
+
+def export_name(name: str, n: int | None = None) -> str | None:
+    """The extension's name for kernel ``name`` built for n coordinates (None: not built for it)."""
+    if "{n}" not in EXPORTS[name][2]:
+        return name
+    return f"{name}_n{n}" if n in SIZES else None
 
 
 def source_stamp() -> int:
@@ -64,7 +76,8 @@ def compiler():
     cc.verbose = False
     for name, (module, func, sig) in EXPORTS.items():
         fn = getattr(importlib.import_module(module), func)
-        cc.export(name, sig)(fn.py_func)
+        for n in SIZES if "{n}" in sig else (None,):
+            cc.export(export_name(name, n), sig.format(n=n))(fn.py_func)
     stamp = source_stamp()
     cc.export("stamp", "i8()")(eval(f"lambda: {stamp}"))  # the sources it was built from
     return cc

@@ -31,12 +31,16 @@ def ahead_of_time() -> bool:
     return _aot() is not None
 
 
-def kernel(name: str):
-    """The callable for one of rbhyst.solve.kernels.aot.EXPORTS."""
+def kernel(name: str, n: int | None = None):
+    """The callable for one of rbhyst.solve.kernels.aot.EXPORTS, for a body of n coordinates
+    where the kernel is compiled for each n (built ahead of time for aot.SIZES, else the JIT's)."""
+    from rbhyst.solve.kernels.aot import EXPORTS, export_name
+
     module = _aot()
     if module is not None:
-        return getattr(module, name)
-    from rbhyst.solve.kernels.aot import EXPORTS
+        built = export_name(name, n)
+        if built is not None:
+            return getattr(module, built)
 
     mod, func, _ = EXPORTS[name]
     return getattr(importlib.import_module(mod), func)

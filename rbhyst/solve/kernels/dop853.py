@@ -1,7 +1,10 @@
 """The adaptive integration's compiled kernel: DOP853 between reversals located as events.
 
 See rbhyst.solve.integrators.reference for the method; this module holds only compiled code (the
-driver there calls it through rbhyst.solve.kernels.compiled).
+driver there calls it through rbhyst.solve.kernels.compiled). The state is y = (q, v, input
+energy, viscous work) of 2 n + 2 values for a body of n coordinates (dop853_layout.ny); n is the
+length of the tuple minv, a compile-time constant, so that the loops over the coordinates unroll
+(rbhyst.solve.integrators.steps says why).
 """
 
 from __future__ import annotations
@@ -11,7 +14,7 @@ import math
 from numba import njit
 
 from rbhyst.model.hysteresis import ALPHA, EXP_ARG_MAX
-from rbhyst.solve.kernels.dop853_layout import (NERR, NS, NY, R_ELEMENT, R_EVENTS, R_FEV, R_HMAX, R_HMIN, R_REJECTED, R_START_FLIPS, R_STATUS, R_STEPS, R_TIME, SIMULTANEOUS, ST_NONFINITE, ST_OK, ST_OVERFLOW, ST_STEP_TOO_SMALL, ST_TOO_MANY_STEPS)
+from rbhyst.solve.kernels.dop853_layout import (NS, R_ELEMENT, R_EVENTS, R_FEV, R_HMAX, R_HMIN, R_REJECTED, R_START_FLIPS, R_STATUS, R_STEPS, R_TIME, SIMULTANEOUS, ST_NONFINITE, ST_OK, ST_OVERFLOW, ST_STEP_TOO_SMALL, ST_TOO_MANY_STEPS)
 from rbhyst.model.signals import HALF_SINE, HAVERSINE, ROW_SIZE as ROW, SAWTOOTH, SINE
 from rbhyst.model.vrm import branch_eval, branch_row
 
@@ -58,51 +61,64 @@ def _analytic(sig, i, t, inside):
 
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
-def _load(t, k, brk, pcoef, sig, out):
+def _load(t, k, brk, pcoef, sig, out, n):
     """The load at t in piece k: the records' share linear between the piece's ends (exact: their
     samples are breakpoints), every analytic signal evaluated where it is (no fit, no table)."""
     ta = brk[k]
     tb = brk[k + 1]
     w = (t - ta) / (tb - ta)
-    for c in range(3):
+    for c in range(n):
         out[c] = pcoef[k, 0, c] + w * (pcoef[k, 1, c] - pcoef[k, 0, c])
     mid = 0.5 * (ta + tb)
     for i in range(sig.shape[0]):
         v = _analytic(sig, i, t, sig[i, 4] <= mid <= sig[i, 5])
         if v != 0.0:
-            for c in range(3):
+            for c in range(n):
                 out[c] += sig[i, ROW + c] * v
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _bdot(bvec, e, y, first, n):
+    """b_e . y[first:first + n], summed from the first term (y at 0: q; at n: v)."""
+    acc = bvec[e, 0] * y[first]
+    for i in range(1, n):
+        acc += bvec[e, i] * y[first + i]
+    return acc
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
 def _rhs(t, y, k, brk, pcoef, sig, minv, bvec, mult, params, cm, s, up, gp, p, dy):
-    """dy = (v, M^-1 (p - R - C v), p . v, v . C v); returns the first element that overflowed, or -1."""
-    _load(t, k, brk, pcoef, sig, p)
-    r0 = 0.0
-    r1 = 0.0
-    r2 = 0.0
+    """dy = (v, M^-1 (p - R - C v), p . v, v . C v) (seed eq. 11); p (3, n) is work space (the
+    load, R, C v); returns the first element that overflowed, or -1."""
+    n = len(minv)
+    load = p[0]
+    r = p[1]
+    cv = p[2]
+    _load(t, k, brk, pcoef, sig, load, n)
+    for i in range(n):
+        r[i] = 0.0
     for e in range(bvec.shape[0]):
-        b0 = bvec[e, 0]
-        b1 = bvec[e, 1]
-        b2 = bvec[e, 2]
-        f, _, ok = _force(params, e, s[e], up[e], gp[e], b0 * y[0] + b1 * y[1] + b2 * y[2])
+        f, _, ok = _force(params, e, s[e], up[e], gp[e], _bdot(bvec, e, y, 0, n))
         if not ok:
             return e
         mf = mult[e] * f
-        r0 += mf * b0
-        r1 += mf * b1
-        r2 += mf * b2
-    dy[0] = y[3]
-    dy[1] = y[4]
-    dy[2] = y[5]
-    c0 = cm[0, 0] * y[3] + cm[0, 1] * y[4] + cm[0, 2] * y[5]
-    c1 = cm[1, 0] * y[3] + cm[1, 1] * y[4] + cm[1, 2] * y[5]
-    c2 = cm[2, 0] * y[3] + cm[2, 1] * y[4] + cm[2, 2] * y[5]
-    dy[3] = minv[0] * (p[0] - r0 - c0)
-    dy[4] = minv[1] * (p[1] - r1 - c1)
-    dy[5] = minv[2] * (p[2] - r2 - c2)
-    dy[6] = p[0] * y[3] + p[1] * y[4] + p[2] * y[5]
-    dy[7] = c0 * y[3] + c1 * y[4] + c2 * y[5]
+        for i in range(n):
+            r[i] += mf * bvec[e, i]
+    for i in range(n):
+        dy[i] = y[n + i]
+        acc = cm[i, 0] * y[n]
+        for j in range(1, n):
+            acc += cm[i, j] * y[n + j]
+        cv[i] = acc
+    for i in range(n):
+        dy[n + i] = minv[i] * (load[i] - r[i] - cv[i])
+    power = load[0] * y[n]
+    viscous = cv[0] * y[n]
+    for i in range(1, n):
+        power += load[i] * y[n + i]
+        viscous += cv[i] * y[n + i]
+    dy[2 * n] = power
+    dy[2 * n + 1] = viscous
     return -1
 
 
@@ -120,18 +136,23 @@ def _dense(F, y_old, x, i):
 
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
-def _g_dense(F, y_old, x, bvec, e, s):
+def _g_dense(F, y_old, x, bvec, e, s, n):
     """s_e (b_e . v) on the dense output: positive while the element moves along its branch."""
-    w = bvec[e, 0] * _dense(F, y_old, x, 3) + bvec[e, 1] * _dense(F, y_old, x, 4) + bvec[e, 2] * _dense(F, y_old, x, 5)
+    w = bvec[e, 0] * _dense(F, y_old, x, n)
+    for i in range(1, n):
+        w += bvec[e, i] * _dense(F, y_old, x, n + i)
     return s * w
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
 def _integrate(minv, bvec, mult, params, cm, brk, pcoef, sig, t_out, rtol, atol, init, y0, h_first, max_steps,
                A, B, C, E3, E5, D, out_y, out_eu, out_ef, out_eh, info, el, vec, K, F, p, gs):
-    """The whole integration; el (6, ne), vec (7, NY), K (16, NY), F (7, NY), p (3,), gs (NS + 1,)
-    are its work space (allocated by the caller: no reference counting in here)."""
+    """The whole integration; el (6, ne), vec (7, ny), K (16, ny), F (7, ny), p (3, n), gs (NS + 1,)
+    are its work space (allocated by the caller: no reference counting in here), y0 (n,) the start."""
     ne = bvec.shape[0]
+    n = len(minv)
+    ny = 2 * n + 2  # q, v, input energy, viscous work
+    nerr = 2 * n  # under error control: not the energies
     n_int = brk.shape[0] - 1
     n_out = t_out.shape[0]
     el[:, :] = 0.0
@@ -155,9 +176,8 @@ def _integrate(minv, bvec, mult, params, cm, brk, pcoef, sig, t_out, rtol, atol,
             ap[e] = init[3, e]
 
     y = vec[0]
-    y[0] = y0[0]
-    y[1] = y0[1]
-    y[2] = y0[2]
+    for i in range(n):
+        y[i] = y0[i]
     y_new = vec[1]
     y_ev = vec[2]
     ytmp = vec[3]
@@ -189,9 +209,9 @@ def _integrate(minv, bvec, mult, params, cm, brk, pcoef, sig, t_out, rtol, atol,
         if io < n_out and t_out[io] <= t:
             # outputs at the start (t = 0) come from the state itself
             while io < n_out and t_out[io] <= t:
-                for i in range(NY):
+                for i in range(ny):
                     yo[i] = y[i]
-                io = _write(io, yo, bvec, mult, params, s, up, gp, ap, wacc, out_y, out_eu, out_ef, out_eh)
+                io = _write(io, yo, bvec, mult, params, s, up, gp, ap, wacc, out_y, out_eu, out_ef, out_eh, n)
         while tb - t > 1e-13 * max(1.0, abs(tb)):
             if n_steps + n_rej > max_steps:
                 info[R_STATUS] = ST_TOO_MANY_STEPS
@@ -205,12 +225,12 @@ def _integrate(minv, bvec, mult, params, cm, brk, pcoef, sig, t_out, rtol, atol,
                 info[R_TIME] = t
                 return io
             # ---- one DOP853 step
-            for i in range(NY):
+            for i in range(ny):
                 K[0, i] = f[i]
             bad = _stages(1, 12, t, hh, y, k, brk, pcoef, sig, minv, bvec, mult, params, cm, s, up, gp, p, A, C, K, ytmp)
             n_fev += 11
             if bad < 0:
-                for i in range(NY):
+                for i in range(ny):
                     acc = 0.0
                     for j in range(12):
                         acc += B[j] * K[j, i]
@@ -227,11 +247,11 @@ def _integrate(minv, bvec, mult, params, cm, brk, pcoef, sig, t_out, rtol, atol,
                 info[R_ELEMENT] = bad
                 info[R_TIME] = t
                 return io
-            for i in range(NY):
+            for i in range(ny):
                 K[12, i] = f_new[i]
             err5 = 0.0
             err3 = 0.0
-            for i in range(NERR):
+            for i in range(nerr):
                 sc = atol[i] + rtol * max(abs(y[i]), abs(y_new[i]))
                 a5 = 0.0
                 a3 = 0.0
@@ -245,7 +265,7 @@ def _integrate(minv, bvec, mult, params, cm, brk, pcoef, sig, t_out, rtol, atol,
             if err5 == 0.0 and err3 == 0.0:
                 err = 0.0
             else:
-                err = hh * err5 / math.sqrt((err5 + 0.01 * err3) * NERR)
+                err = hh * err5 / math.sqrt((err5 + 0.01 * err3) * nerr)
             if not (err < math.inf):
                 h = 0.25 * hh
                 n_rej += 1
@@ -258,14 +278,14 @@ def _integrate(minv, bvec, mult, params, cm, brk, pcoef, sig, t_out, rtol, atol,
             # ---- events: an element's velocity crossing zero against its branch
             need = False
             for e in range(ne):
-                g0 = s[e] * (bvec[e, 0] * y[3] + bvec[e, 1] * y[4] + bvec[e, 2] * y[5])
-                g1 = s[e] * (bvec[e, 0] * y_new[3] + bvec[e, 1] * y_new[4] + bvec[e, 2] * y_new[5])
+                g0 = s[e] * _bdot(bvec, e, y, n, n)
+                g1 = s[e] * _bdot(bvec, e, y_new, n, n)
                 if g1 < 0.0:
                     need = True
                     break
                 # cubic Hermite of g over the step, from g and g' at both ends
-                d0 = hh * s[e] * (bvec[e, 0] * f[3] + bvec[e, 1] * f[4] + bvec[e, 2] * f[5])
-                d1 = hh * s[e] * (bvec[e, 0] * f_new[3] + bvec[e, 1] * f_new[4] + bvec[e, 2] * f_new[5])
+                d0 = hh * s[e] * _bdot(bvec, e, f, n, n)
+                d1 = hh * s[e] * _bdot(bvec, e, f_new, n, n)
                 seen = g0 > 0.0
                 for m in range(1, NS):
                     x = m / NS
@@ -292,10 +312,10 @@ def _integrate(minv, bvec, mult, params, cm, brk, pcoef, sig, t_out, rtol, atol,
                 for e in range(ne):
                     xroot[e] = 2.0
                     se = s[e]
-                    gs[0] = se * (bvec[e, 0] * y[3] + bvec[e, 1] * y[4] + bvec[e, 2] * y[5])
-                    gs[NS] = se * (bvec[e, 0] * y_new[3] + bvec[e, 1] * y_new[4] + bvec[e, 2] * y_new[5])
+                    gs[0] = se * _bdot(bvec, e, y, n, n)
+                    gs[NS] = se * _bdot(bvec, e, y_new, n, n)
                     for m in range(1, NS):
-                        gs[m] = _g_dense(F, y, m / NS, bvec, e, se)
+                        gs[m] = _g_dense(F, y, m / NS, bvec, e, se, n)
                     seen = gs[0] > 0.0
                     found = -1
                     for m in range(1, NS + 1):
@@ -324,7 +344,7 @@ def _integrate(minv, bvec, mult, params, cm, brk, pcoef, sig, t_out, rtol, atol,
                         xm = (xa * gb - xb * ga) / (gb - ga) if ga != gb else 0.5 * (xa + xb)
                         if not (xa < xm < xb):
                             xm = 0.5 * (xa + xb)
-                        gm = _g_dense(F, y, xm, bvec, e, se)
+                        gm = _g_dense(F, y, xm, bvec, e, se, n)
                         if gm == 0.0:
                             xa = xm
                             xb = xm
@@ -350,7 +370,7 @@ def _integrate(minv, bvec, mult, params, cm, brk, pcoef, sig, t_out, rtol, atol,
                 # a branch chosen against the motion (a virgin element, or round-off at a reversal)
                 for e in range(ne):
                     if xroot[e] == 0.0:
-                        _new_branch(e, y, bvec, params, s, up, gp, ap, wacc)
+                        _new_branch(e, y, bvec, params, s, up, gp, ap, wacc, n)
                         n_start += 1
                 bad = _rhs(t, y, k, brk, pcoef, sig, minv, bvec, mult, params, cm, s, up, gp, p, f)
                 n_fev += 1
@@ -364,32 +384,32 @@ def _integrate(minv, bvec, mult, params, cm, brk, pcoef, sig, t_out, rtol, atol,
                 # outputs before the reversal from this step's dense output
                 while io < n_out and t_out[io] < t_ev:
                     x = (t_out[io] - t) / hh
-                    for i in range(NY):
+                    for i in range(ny):
                         yo[i] = _dense(F, y, x, i)
-                    io = _write(io, yo, bvec, mult, params, s, up, gp, ap, wacc, out_y, out_eu, out_ef, out_eh)
+                    io = _write(io, yo, bvec, mult, params, s, up, gp, ap, wacc, out_y, out_eu, out_ef, out_eh, n)
                 # redo the step to the reversal exactly
                 h_ev = t_ev - t
                 if h_ev > 0.0:
                     _stages(1, 12, t, h_ev, y, k, brk, pcoef, sig, minv, bvec, mult, params, cm, s, up, gp, p, A, C, K, ytmp)
                     n_fev += 11
-                    for i in range(NY):
+                    for i in range(ny):
                         acc = 0.0
                         for j in range(12):
                             acc += B[j] * K[j, i]
                         y_ev[i] = y[i] + h_ev * acc
                 else:
-                    for i in range(NY):
+                    for i in range(ny):
                         y_ev[i] = y[i]
                 t = t_ev
-                for i in range(NY):
+                for i in range(ny):
                     y[i] = y_ev[i]
                 while io < n_out and t_out[io] <= t:
-                    io = _write(io, y, bvec, mult, params, s, up, gp, ap, wacc, out_y, out_eu, out_ef, out_eh)
+                    io = _write(io, y, bvec, mult, params, s, up, gp, ap, wacc, out_y, out_eu, out_ef, out_eh, n)
                 # elements that reverse together (identical b and sets, or by chance within
                 # SIMULTANEOUS of the step) all start their new branches here
                 for e in range(ne):
                     if xroot[e] <= x_ev + SIMULTANEOUS:
-                        _new_branch(e, y, bvec, params, s, up, gp, ap, wacc)
+                        _new_branch(e, y, bvec, params, s, up, gp, ap, wacc, n)
                         n_ev += 1
                 n_steps += 1
                 bad = _rhs(t, y, k, brk, pcoef, sig, minv, bvec, mult, params, cm, s, up, gp, p, f)
@@ -405,12 +425,12 @@ def _integrate(minv, bvec, mult, params, cm, brk, pcoef, sig, t_out, rtol, atol,
                     n_fev += 3
                     have_dense = True
                 x = (t_out[io] - t) / hh
-                for i in range(NY):
+                for i in range(ny):
                     yo[i] = _dense(F, y, x, i)
-                io = _write(io, yo, bvec, mult, params, s, up, gp, ap, wacc, out_y, out_eu, out_ef, out_eh)
+                io = _write(io, yo, bvec, mult, params, s, up, gp, ap, wacc, out_y, out_eu, out_ef, out_eh, n)
             clipped = hh < h
             t = tb if hh == tb - t else t + hh
-            for i in range(NY):
+            for i in range(ny):
                 y[i] = y_new[i]
                 f[i] = f_new[i]
             n_steps += 1
@@ -418,14 +438,17 @@ def _integrate(minv, bvec, mult, params, cm, brk, pcoef, sig, t_out, rtol, atol,
             h_max_seen = max(h_max_seen, hh)
             h = max(h, hh * factor) if clipped else hh * factor
             while io < n_out and t_out[io] <= t:
-                io = _write(io, y, bvec, mult, params, s, up, gp, ap, wacc, out_y, out_eu, out_ef, out_eh)
-            if not (math.isfinite(y[0]) and math.isfinite(y[1]) and math.isfinite(y[2])):
+                io = _write(io, y, bvec, mult, params, s, up, gp, ap, wacc, out_y, out_eu, out_ef, out_eh, n)
+            finite = True
+            for i in range(n):
+                finite = finite and math.isfinite(y[i])
+            if not finite:
                 info[R_STATUS] = ST_NONFINITE
                 info[R_TIME] = t
                 return io
     # outputs left by round-off at the very end
     while io < n_out:
-        io = _write(io, y, bvec, mult, params, s, up, gp, ap, wacc, out_y, out_eu, out_ef, out_eh)
+        io = _write(io, y, bvec, mult, params, s, up, gp, ap, wacc, out_y, out_eu, out_ef, out_eh, n)
     info[R_STATUS] = ST_OK
     info[R_STEPS] = n_steps
     info[R_REJECTED] = n_rej
@@ -442,7 +465,7 @@ def _stages(first, last, t, hh, y, k, brk, pcoef, sig, minv, bvec, mult, params,
     """Runge-Kutta stages first..last-1 of a step hh from (t, y) into the rows of K;
     returns the first element whose exponential overflowed, or -1."""
     for st in range(first, last):
-        for i in range(NY):
+        for i in range(2 * len(minv) + 2):
             acc = 0.0
             for j in range(st):
                 acc += A[st, j] * K[j, i]
@@ -458,7 +481,7 @@ def _dense_coefficients(t, hh, y, y_new, f, f_new, k, brk, pcoef, sig, minv, bve
                         A, C, D, K, F, ytmp):
     """The three extra stages and the 7 rows of DOP853's dense output (as scipy's DOP853)."""
     _stages(13, 16, t, hh, y, k, brk, pcoef, sig, minv, bvec, mult, params, cm, s, up, gp, p, A, C, K, ytmp)
-    for i in range(NY):
+    for i in range(2 * len(minv) + 2):
         dy = y_new[i] - y[i]
         F[0, i] = dy
         F[1, i] = hh * f[i] - dy
@@ -471,9 +494,9 @@ def _dense_coefficients(t, hh, y, y_new, f, f_new, k, brk, pcoef, sig, minv, bve
 
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
-def _new_branch(e, y, bvec, params, s, up, gp, ap, wacc):
+def _new_branch(e, y, bvec, params, s, up, gp, ap, wacc, n):
     """Element e reverses at the current state: a new branch from the force it has (eq. 14)."""
-    u = bvec[e, 0] * y[0] + bvec[e, 1] * y[1] + bvec[e, 2] * y[2]
+    u = _bdot(bvec, e, y, 0, n)
     f_old, big_old, _ = _force(params, e, s[e], up[e], gp[e], u)
     alpha = params[e, branch_row(s[e]), ALPHA]
     wacc[e] += big_old - ap[e] + s[e] * gp[e] * (math.exp(-s[e] * alpha * (u - up[e])) - 1.0) / alpha
@@ -486,19 +509,19 @@ def _new_branch(e, y, bvec, params, s, up, gp, ap, wacc):
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
-def _write(io, y, bvec, mult, params, s, up, gp, ap, wacc, out_y, out_eu, out_ef, out_eh):
+def _write(io, y, bvec, mult, params, s, up, gp, ap, wacc, out_y, out_eu, out_ef, out_eh, n):
     """One output row from the state y on the current branches: the state, each element row's
     deformation and force, the hysteretic work."""
     eh = 0.0
     for e in range(bvec.shape[0]):
-        u = bvec[e, 0] * y[0] + bvec[e, 1] * y[1] + bvec[e, 2] * y[2]
+        u = _bdot(bvec, e, y, 0, n)
         fe, big, _ = _force(params, e, s[e], up[e], gp[e], u)
         alpha = params[e, branch_row(s[e]), ALPHA]
         w = wacc[e] + big - ap[e] + s[e] * gp[e] * (math.exp(-s[e] * alpha * (u - up[e])) - 1.0) / alpha
         out_eu[io, e] = u
         out_ef[io, e] = fe
         eh += mult[e] * w
-    for i in range(NY):
+    for i in range(2 * n + 2):
         out_y[io, i] = y[i]
     out_eh[io] = eh
     return io + 1

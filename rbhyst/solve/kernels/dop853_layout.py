@@ -3,8 +3,13 @@ driver (rbhyst.solve.integrators.reference): state vector, samples, info slots. 
 
 NS = 8  # samples of b . v per step when looking for a crossing
 SIMULTANEOUS = 1e-9  # reversals this close (fraction of the step) are one event
-NY = 8  # q (3), v (3), input energy, viscous work
-NERR = 6  # components under error control (not the energies)
+
+
+def ny(n: int) -> int:
+    """Length of the state of a body of n coordinates: q (n), v (n), input energy, viscous work;
+    the first 2 n are under error control (not the energies)."""
+    return 2 * n + 2
+
 
 # info layout
 R_STATUS, R_TIME, R_ELEMENT, R_STEPS, R_REJECTED, R_EVENTS, R_FEV, R_HMIN, R_HMAX, R_START_FLIPS = range(10)

@@ -32,30 +32,78 @@ def sym3_max_eig(a11, a22, a33, a12, a13, a23):
     return q + 2.0 * p * math.cos(phi)
 
 
+@njit(cache=True, error_model="numpy", _nrt=False)
+def sym_max_eig(a, n):
+    """Largest eigenvalue of the symmetric (n, n) matrix a (overwritten where n > 3).
+
+    Closed forms up to n = 3 (the plane body's is sym3_max_eig); beyond, cyclic Jacobi
+    rotations to round-off (a few sweeps for n <= 6), which need no work space.
+    """
+    if n == 1:
+        return a[0, 0]
+    if n == 2:
+        h = 0.5 * (a[0, 0] - a[1, 1])
+        return 0.5 * (a[0, 0] + a[1, 1]) + math.sqrt(h * h + a[0, 1] * a[0, 1])
+    if n == 3:
+        return sym3_max_eig(a[0, 0], a[1, 1], a[2, 2], a[0, 1], a[0, 2], a[1, 2])
+    for _ in range(100):
+        off = 0.0
+        diag = 0.0
+        for i in range(n):
+            diag += a[i, i] * a[i, i]
+            for j in range(i + 1, n):
+                off += a[i, j] * a[i, j]
+        if off <= 1e-32 * diag or off == 0.0:
+            break
+        for p in range(n - 1):
+            for q in range(p + 1, n):
+                apq = a[p, q]
+                if apq == 0.0:
+                    continue
+                # the rotation that zeroes a[p, q] (Golub and Van Loan, Algorithm 8.5.1)
+                tau = (a[q, q] - a[p, p]) / (2.0 * apq)
+                t = (1.0 if tau >= 0.0 else -1.0) / (abs(tau) + math.sqrt(1.0 + tau * tau))
+                c = 1.0 / math.sqrt(1.0 + t * t)
+                s = t * c
+                for k in range(n):
+                    akp = a[k, p]
+                    akq = a[k, q]
+                    a[k, p] = c * akp - s * akq
+                    a[k, q] = s * akp + c * akq
+                for k in range(n):
+                    apk = a[p, k]
+                    aqk = a[q, k]
+                    a[p, k] = c * apk - s * aqk
+                    a[q, k] = s * apk + c * aqk
+    top = a[0, 0]
+    for i in range(1, n):
+        top = max(top, a[i, i])
+    return top
+
+
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
-def update_elements(bvec, mult, params, q0, q1, q2, st, cur, kpeak):
-    """Elements at the new configuration q (eqs. 5-11).
+def update_elements(bvec, mult, params, q, st, cur, kpeak, r, n):
+    """Elements at the new configuration q (n,) (eqs. 5-11): u_e = b_e . q, R = sum mult b f.
 
     st: (2, ne, 6) element states; st[cur] holds the state at the start of the step
     (columns U, F, S, G, K, A, see hysteresis.vrm_update), st[1 - cur] receives the new
     state (two buffers used in turn: an accepted step copies nothing); kpeak (ne, 2) receives
-    the largest tangent over the step and the tangent at its end.
-    Returns (ok, bad element, work of all element forces over the step, and the
-    restoring force sum mult b f as three scalars).
+    the largest tangent over the step and the tangent at its end; r (n,) the restoring force.
+    n = bvec.shape[1], given by the caller: inlined into a kernel where it is a compile-time
+    constant (rbhyst.solve.kernels.loop), every loop over the coordinates unrolls.
+    Returns (ok, bad element, work of all element forces over the step).
     """
-    r0 = 0.0
-    r1 = 0.0
-    r2 = 0.0
+    for i in range(n):
+        r[i] = 0.0
     work = 0.0
     for e in range(bvec.shape[0]):
-        b0 = bvec[e, 0]
-        b1 = bvec[e, 1]
-        b2 = bvec[e, 2]
-        u = b0 * q0 + b1 * q1 + b2 * q2
+        u = bvec[e, 0] * q[0]
+        for i in range(1, n):
+            u += bvec[e, i] * q[i]
         f, s, g, k, a, kstart, w, ok = vrm_update(params, e, st[cur, e, U], st[cur, e, F], st[cur, e, S],
                                                   st[cur, e, G], st[cur, e, K], st[cur, e, A], u)
         if not ok:
-            return False, e, work, r0, r1, r2
+            return False, e, work
         nxt = 1 - cur
         st[nxt, e, U] = u
         st[nxt, e, F] = f
@@ -68,10 +116,9 @@ def update_elements(bvec, mult, params, q0, q1, q2, st, cur, kpeak):
         m = mult[e]
         work += m * w
         mf = m * f
-        r0 += mf * b0
-        r1 += mf * b1
-        r2 += mf * b2
-    return True, -1, work, r0, r1, r2
+        for i in range(n):
+            r[i] += mf * bvec[e, i]
+    return True, -1, work
 
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
@@ -94,35 +141,69 @@ def omega_squared(mult, kpeak, wgt):
 
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
-def bbt_sums(bvec, mult, k, col, minv, normalized):
-    """The six entries (11, 22, 33, 12, 13, 23) of K = sum mult k_e b_e b_e^T with k_e = k[e, col]
-    (k: (ne, m)),
-    or where ``normalized`` of M^-1/2 K M^-1/2 with negative k_e taken as 0 (for omega_max^2)."""
-    s11 = s22 = s33 = s12 = s13 = s23 = 0.0
-    q0 = math.sqrt(minv[0]) if normalized else 1.0
-    q1 = math.sqrt(minv[1]) if normalized else 1.0
-    q2 = math.sqrt(minv[2]) if normalized else 1.0
+def bbt_sums(bvec, mult, k, col, minv, normalized, out, scale):
+    """out (n, n) = K = sum mult k_e b_e b_e^T with k_e = k[e, col] (k: (ne, m)), or where
+    ``normalized`` M^-1/2 K M^-1/2 with negative k_e taken as 0 (for omega_max^2); scale (n,)
+    is work space; n = len(minv).
+
+    Up to three coordinates the six sums are kept in registers and stored once (Newton's
+    matrix is built at every iteration: summing into memory cost Newmark's step 8 %); n is
+    a compile-time constant where this is inlined into a kernel, so only one branch is compiled.
+    """
+    n = len(minv)
+    if n <= 3:
+        s11 = s22 = s33 = s12 = s13 = s23 = 0.0
+        q0 = math.sqrt(minv[0]) if normalized else 1.0
+        q1 = math.sqrt(minv[1 % n]) if normalized else 1.0
+        q2 = math.sqrt(minv[2 % n]) if normalized else 1.0
+        for e in range(bvec.shape[0]):
+            ke = mult[e] * (max(k[e, col], 0.0) if normalized else k[e, col])
+            if ke == 0.0:
+                continue
+            x = bvec[e, 0] * q0
+            y = bvec[e, 1] * q1 if n > 1 else 0.0
+            z = bvec[e, 2] * q2 if n > 2 else 0.0
+            s11 += ke * x * x
+            s22 += ke * y * y
+            s33 += ke * z * z
+            s12 += ke * x * y
+            s13 += ke * x * z
+            s23 += ke * y * z
+        out[0, 0] = s11
+        if n > 1:
+            out[1, 1] = s22
+            out[0, 1] = s12
+            out[1, 0] = s12
+        if n > 2:
+            out[2, 2] = s33
+            out[0, 2] = s13
+            out[2, 0] = s13
+            out[1, 2] = s23
+            out[2, 1] = s23
+        return
+    for i in range(n):
+        scale[i] = math.sqrt(minv[i]) if normalized else 1.0
+        for j in range(n):
+            out[i, j] = 0.0
     for e in range(bvec.shape[0]):
         ke = mult[e] * (max(k[e, col], 0.0) if normalized else k[e, col])
         if ke == 0.0:
             continue
-        x = bvec[e, 0] * q0
-        y = bvec[e, 1] * q1
-        z = bvec[e, 2] * q2
-        s11 += ke * x * x
-        s22 += ke * y * y
-        s33 += ke * z * z
-        s12 += ke * x * y
-        s13 += ke * x * z
-        s23 += ke * y * z
-    return s11, s22, s33, s12, s13, s23
+        for i in range(n):
+            x = bvec[e, i] * scale[i]
+            for j in range(i, n):
+                out[i, j] += ke * x * (bvec[e, j] * scale[j])
+    for i in range(n):
+        for j in range(i):
+            out[i, j] = out[j, i]
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
-def omega_squared_exact(bvec, mult, minv, kpeak):
-    """max eig(M^-1/2 K M^-1/2), the exact omega_max^2 of the tangent system (kpeak: (ne, 2), column 0)."""
-    s11, s22, s33, s12, s13, s23 = bbt_sums(bvec, mult, kpeak, 0, minv, True)
-    return sym3_max_eig(s11, s22, s33, s12, s13, s23)
+def omega_squared_exact(bvec, mult, minv, kpeak, work, scale):
+    """max eig(M^-1/2 K M^-1/2), the exact omega_max^2 of the tangent system (kpeak: (ne, 2),
+    column 0); work (n, n) and scale (n,) are work space."""
+    bbt_sums(bvec, mult, kpeak, 0, minv, True, work, scale)
+    return sym_max_eig(work, len(minv))
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
@@ -134,18 +215,78 @@ def copy_rows(src, dst):
 
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
-def mat_row(c, lv, k, i, x0, x1, x2):
-    """Row i of the coefficient matrix c[lv, k] times (x0, x1, x2)."""
-    return c[lv, k, i, 0] * x0 + c[lv, k, i, 1] * x1 + c[lv, k, i, 2] * x2
+def copy_vector(src, dst, n):
+    """dst[:] = src for (n,) arrays, without a temporary."""
+    for i in range(n):
+        dst[i] = src[i]
 
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
-def substep_load(load, j, w0, w1):
-    """The load at the fractions w0 and w1 of compute step j, linear within it (six scalars)."""
-    pa0 = load[j, 0] + w0 * (load[j + 1, 0] - load[j, 0])
-    pa1 = load[j, 1] + w0 * (load[j + 1, 1] - load[j, 1])
-    pa2 = load[j, 2] + w0 * (load[j + 1, 2] - load[j, 2])
-    pb0 = load[j, 0] + w1 * (load[j + 1, 0] - load[j, 0])
-    pb1 = load[j, 1] + w1 * (load[j + 1, 1] - load[j, 1])
-    pb2 = load[j, 2] + w1 * (load[j + 1, 2] - load[j, 2])
-    return pa0, pa1, pa2, pb0, pb1, pb2
+def mat_row(c, lv, k, i, x, n):
+    """Row i of the coefficient matrix c[lv, k] times x (n,), summed from the first term."""
+    acc = c[lv, k, i, 0] * x[0]
+    for j in range(1, n):
+        acc += c[lv, k, i, j] * x[j]
+    return acc
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def row_dot(m, i, x, n):
+    """Row i of the matrix m (n, n) times x (n,), summed from the first term."""
+    acc = m[i, 0] * x[0]
+    for j in range(1, n):
+        acc += m[i, j] * x[j]
+    return acc
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def substep_load(load, j, w0, w1, pa, pb, n):
+    """The load at the fractions w0 (into pa) and w1 (into pb) of compute step j, linear within it."""
+    for c in range(n):
+        pa[c] = load[j, c] + w0 * (load[j + 1, c] - load[j, c])
+        pb[c] = load[j, c] + w1 * (load[j + 1, c] - load[j, c])
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def solve_in_place(a, b, n):
+    """b := a^-1 b for the symmetric a (n, n) (overwritten), whose leading minors are positive
+    (the matrices of a step: M / h^2 dominates). Up to n = 3 by cofactors, in registers (n is a
+    compile-time constant where this is inlined into a kernel, and the branches not taken
+    vanish); beyond, Gaussian elimination without pivoting. A singular matrix gives Inf or
+    NaN, which the caller takes for one."""
+    if n == 1:
+        b[0] = b[0] / a[0, 0]
+        return
+    if n == 2:
+        k11, k22, k12 = a[0, 0], a[1, 1], a[0, 1]
+        det = k11 * k22 - k12 * k12
+        g0, g1 = b[0], b[1]
+        b[0] = (k22 * g0 - k12 * g1) / det
+        b[1] = (k11 * g1 - k12 * g0) / det
+        return
+    if n == 3:
+        k11, k22, k33, k12, k13, k23 = a[0, 0], a[1, 1], a[2, 2], a[0, 1], a[0, 2], a[1, 2]
+        c11 = k22 * k33 - k23 * k23
+        c12 = k13 * k23 - k12 * k33
+        c13 = k12 * k23 - k13 * k22
+        c22 = k11 * k33 - k13 * k13
+        c23 = k12 * k13 - k11 * k23
+        c33 = k11 * k22 - k12 * k12
+        det = k11 * c11 + k12 * c12 + k13 * c13
+        g0, g1, g2 = b[0], b[1], b[2]
+        b[0] = (c11 * g0 + c12 * g1 + c13 * g2) / det
+        b[1] = (c12 * g0 + c22 * g1 + c23 * g2) / det
+        b[2] = (c13 * g0 + c23 * g1 + c33 * g2) / det
+        return
+    for k in range(n):
+        piv = a[k, k]
+        for i in range(k + 1, n):
+            f = a[i, k] / piv
+            for j in range(k + 1, n):
+                a[i, j] -= f * a[k, j]
+            b[i] -= f * b[k]
+    for i in range(n - 1, -1, -1):
+        acc = b[i]
+        for j in range(i + 1, n):
+            acc -= a[i, j] * b[j]
+        b[i] = acc / a[i, i]

@@ -21,12 +21,34 @@ N_STATE = 6
 I_STATUS, I_ELEMENT, I_TIME, I_STIFFNESS, I_OMEGA, I_DISP, I_BRANCH = range(7)
 INFO_SIZE = 7
 
-# the loop's running state, carried from chunk to chunk (state vector)
-X_D, X_V, X_A = 0, 3, 6  # displacement, velocity, acceleration (3 each)
-X_E_IN, X_E_HYST, X_E_VISC = 9, 10, 11  # cumulative input, hysteretic and viscous work
-X_STEPS, X_ITER, X_SUBSTEPS, X_LEVEL_USED, X_OMEGA_DT2, X_LEVEL = 12, 13, 14, 15, 16, 17
-X_CUR = 18  # which of the two element-state buffers holds the current state
-N_X = 19
+# the loop's running state, carried from chunk to chunk (state vector): counters first, then
+# the displacement, velocity and acceleration of the n coordinates (x[X_Q + k n + i])
+X_E_IN, X_E_HYST, X_E_VISC = 0, 1, 2  # cumulative input, hysteretic and viscous work
+X_STEPS, X_ITER, X_SUBSTEPS, X_LEVEL_USED, X_OMEGA_DT2, X_LEVEL = 3, 4, 5, 6, 7, 8
+X_CUR = 9  # which of the two element-state buffers holds the current state
+X_Q = 10
+
+
+def n_x(n: int) -> int:
+    """Length of the state vector of a body of n coordinates."""
+    return X_Q + 3 * n
+
+
+def x_slice(n: int, k: int) -> slice:
+    """Where the displacement (k = 0), velocity (1) or acceleration (2) sits in the state vector."""
+    return slice(X_Q + k * n, X_Q + (k + 1) * n)
+
+
+# the loop's work space: rows of n values each (one (N_W, n) array from the caller, since
+# compiled code here allocates nothing), and one (n, n) matrix
+W_D, W_V, W_A = 0, 1, 2  # the state at the start of a step
+W_DN, W_VN, W_AN = 3, 4, 5  # the state a step reaches
+W_SD, W_SV, W_SA = 6, 7, 8  # the start of a compute step, to redo it with more substeps
+W_PA, W_PB = 9, 10  # the load at the start and the end of a (sub)step
+W_R, W_RN = 11, 12  # the elements' resultant at the end and at the start of a step
+W_X, W_Y, W_Z = 13, 14, 15  # intermediate vectors of a step
+W_Q = 16  # sqrt of M^-1 (the monitor's normalization)
+N_W = 17
 
 # energy columns the loop writes per row
 E_IN, E_KIN, E_HYST, E_VISC = range(4)

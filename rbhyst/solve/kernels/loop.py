@@ -5,6 +5,11 @@ the step (the load interpolated linearly) until ``omega_max * h <= omega_dt_limi
 substep level runs out. The loop's running state (x: displacement, velocity, acceleration,
 energies, counters; st: the element states) is carried from one call to the next, so that
 a run of any length keeps only one chunk of rows in memory.
+
+The body has n coordinates, the length of the tuples mass and minv: the loop and the steps work
+on vectors of n in the work space the caller gives (layout.W_*), so the same source runs the
+seed's plane body (n = 3) and any other, compiled for each n (a compile-time constant: see
+rbhyst.solve.integrators.steps).
 """
 
 from __future__ import annotations
@@ -14,8 +19,8 @@ import math
 from numba import njit
 
 from rbhyst.solve.integrators.steps import take_step
-from rbhyst.solve.kernels.layout import (E_HYST, E_IN, E_KIN, E_VISC, F, I_BRANCH, I_DISP, I_ELEMENT, I_OMEGA, I_STATUS, I_STIFFNESS, I_TIME, NEWTON_FAILED, NONFINITE, NOT_CONVERGED, OK, OVERFLOW, S, U, UNRESOLVED, X_A, X_CUR, X_D, X_E_HYST, X_E_IN, X_E_VISC, X_ITER, X_LEVEL, X_LEVEL_USED, X_OMEGA_DT2, X_STEPS, X_SUBSTEPS, X_V)
-from rbhyst.solve.kernels.elements import copy_rows, omega_squared, omega_squared_exact, substep_load
+from rbhyst.solve.kernels.layout import (E_HYST, E_IN, E_KIN, E_VISC, F, I_BRANCH, I_DISP, I_ELEMENT, I_OMEGA, I_STATUS, I_STIFFNESS, I_TIME, NEWTON_FAILED, NONFINITE, NOT_CONVERGED, OK, OVERFLOW, S, U, UNRESOLVED, W_A, W_AN, W_D, W_DN, W_PA, W_PB, W_Q, W_SA, W_SD, W_SV, W_V, W_VN, W_Z, X_CUR, X_E_HYST, X_E_IN, X_E_VISC, X_ITER, X_LEVEL, X_LEVEL_USED, X_OMEGA_DT2, X_Q, X_STEPS, X_SUBSTEPS)
+from rbhyst.solve.kernels.elements import copy_rows, copy_vector, omega_squared, omega_squared_exact, row_dot
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
@@ -28,12 +33,14 @@ def _fail(info, status, element, t):
 @njit(cache=True, error_model="numpy", _nrt=False)
 def run_chunk(method, coef, mass, minv, cm, damped, bvec, mult, params, wgt,
               load, t0, h_c, nsub_c, n_steps, omega_dt_limit, min_level, max_level, newton_tol, newton_max_iter,
-              x, st, st_save, kpeak, out_d, out_v, out_u, out_f, out_e, info):
+              x, st, st_save, kpeak, w, wm, out_d, out_v, out_u, out_f, out_e, info):
     """Advance the state x, st over n_steps output steps of nsub_c compute steps of h_c each.
 
-    load: (n_steps * nsub_c + 1, 3) generalized load on the compute grid from the chunk's
+    mass, minv: the diagonals of M and M^-1 as tuples of n (n is their length).
+    load: (n_steps * nsub_c + 1, n) generalized load on the compute grid from the chunk's
     start time t0. Row k of out_* receives the state after output step k + 1. out_e columns:
     input energy, kinetic energy, hysteretic work, viscous work (cumulative).
+    w (layout.N_W, n) and wm (n, n): work space.
     Every compute step is split into at least 2**min_level substeps (a structure-dependent
     method needs omega_0 h within the limit too, see simulate.min_level). A step whose Newton
     iterations fail is retried, like a stiff one, with twice the substeps.
@@ -43,15 +50,14 @@ def run_chunk(method, coef, mass, minv, cm, damped, bvec, mult, params, wgt,
     Returns the number of rows written; info tells how it ended.
     """
     ne = bvec.shape[0]
-    d0 = x[X_D]
-    d1 = x[X_D + 1]
-    d2 = x[X_D + 2]
-    v0 = x[X_V]
-    v1 = x[X_V + 1]
-    v2 = x[X_V + 2]
-    a0 = x[X_A]
-    a1 = x[X_A + 1]
-    a2 = x[X_A + 2]
+    n = len(minv)  # a compile-time constant: mass and minv are tuples (see integrators.steps)
+    d, v, a = w[W_D], w[W_V], w[W_A]
+    dn, vn, an = w[W_DN], w[W_VN], w[W_AN]
+    pa, pb, z = w[W_PA], w[W_PB], w[W_Z]
+    for i in range(n):
+        d[i] = x[X_Q + i]
+        v[i] = x[X_Q + n + i]
+        a[i] = x[X_Q + 2 * n + i]
     e_in = x[X_E_IN]
     e_hyst = x[X_E_HYST]
     e_visc = x[X_E_VISC]
@@ -67,7 +73,9 @@ def run_chunk(method, coef, mass, minv, cm, damped, bvec, mult, params, wgt,
     row = 0
     for j in range(n_steps * nsub_c):
         # the state to restart this compute step from if a substep is rejected
-        sd0, sd1, sd2, sv0, sv1, sv2, sa0, sa1, sa2 = d0, d1, d2, v0, v1, v2, a0, a1, a2
+        copy_vector(d, w[W_SD], n)
+        copy_vector(v, w[W_SV], n)
+        copy_vector(a, w[W_SA], n)
         s_in, s_hyst, s_visc, s_cur = e_in, e_hyst, e_visc, cur
         saved = False
         level = max(level - 1, min_level)
@@ -83,10 +91,9 @@ def run_chunk(method, coef, mass, minv, cm, damped, bvec, mult, params, wgt,
                 # load at the ends of the substep, linear within the compute step
                 w0 = k * inv_nsub
                 w1 = (k + 1) * inv_nsub
-                ok, bad, work, its, n0, n1, n2, nv0, nv1, nv2, na0, na1, na2, _, _, _ = take_step(
-                    method, coef, level, mass, minv, cm, damped, bvec, mult, params, st, cur,
-                    d0, d1, d2, v0, v1, v2, a0, a1, a2, load, j, w0, w1, h, kpeak,
-                    newton_tol, newton_max_iter)
+                ok, bad, work, its = take_step(
+                    method, coef, level, mass, minv, cm, damped, bvec, mult, params, st, cur, w, wm,
+                    load, j, w0, w1, h, kpeak, newton_tol, newton_max_iter)
                 iterations += its
                 steps_taken += 1
                 t_now = t0 + (j + w1) * h_c
@@ -102,7 +109,7 @@ def run_chunk(method, coef, mass, minv, cm, damped, bvec, mult, params, wgt,
                 # resolution check on the stiffest instantaneous mode of the step
                 lam, worst = omega_squared(mult, kpeak, wgt)
                 if lam * h * h > limit2:
-                    lam = omega_squared_exact(bvec, mult, minv, kpeak)
+                    lam = omega_squared_exact(bvec, mult, minv, kpeak, wm, w[W_Q])
                     if lam * h * h > limit2:
                         if level >= max_level:
                             _fail(info, UNRESOLVED, worst, t_now)
@@ -115,18 +122,23 @@ def run_chunk(method, coef, mass, minv, cm, damped, bvec, mult, params, wgt,
                         break
                 if lam * h * h > omega_dt2_seen:
                     omega_dt2_seen = lam * h * h
-                pa0, pa1, pa2, pb0, pb1, pb2 = substep_load(load, j, w0, w1)
-                e_in += 0.5 * ((pa0 + pb0) * (n0 - d0) + (pa1 + pb1) * (n1 - d1) + (pa2 + pb2) * (n2 - d2))
+                # work of the load (the step left it in pa, pb), trapezoidal in displacement
+                acc = (pa[0] + pb[0]) * (dn[0] - d[0])
+                for i in range(1, n):
+                    acc += (pa[i] + pb[i]) * (dn[i] - d[i])
+                e_in += 0.5 * acc
                 e_hyst += work
                 if damped:
                     # trapezoidal work of the viscous forces C v over the step
-                    s0 = v0 + nv0
-                    s1 = v1 + nv1
-                    s2 = v2 + nv2
-                    e_visc += 0.5 * ((cm[0, 0] * s0 + cm[0, 1] * s1 + cm[0, 2] * s2) * (n0 - d0)
-                                     + (cm[1, 0] * s0 + cm[1, 1] * s1 + cm[1, 2] * s2) * (n1 - d1)
-                                     + (cm[2, 0] * s0 + cm[2, 1] * s1 + cm[2, 2] * s2) * (n2 - d2))
-                d0, d1, d2, v0, v1, v2, a0, a1, a2 = n0, n1, n2, nv0, nv1, nv2, na0, na1, na2
+                    for i in range(n):
+                        z[i] = v[i] + vn[i]
+                    acc = row_dot(cm, 0, z, n) * (dn[0] - d[0])
+                    for i in range(1, n):
+                        acc += row_dot(cm, i, z, n) * (dn[i] - d[i])
+                    e_visc += 0.5 * acc
+                copy_vector(dn, d, n)
+                copy_vector(vn, v, n)
+                copy_vector(an, a, n)
                 cur = 1 - cur
             if accepted:
                 if level > 0:
@@ -134,43 +146,42 @@ def run_chunk(method, coef, mass, minv, cm, damped, bvec, mult, params, wgt,
                     level_used = max(level_used, level)
                 break
             # restart the compute step with twice as many substeps
-            d0, d1, d2, v0, v1, v2, a0, a1, a2 = sd0, sd1, sd2, sv0, sv1, sv2, sa0, sa1, sa2
+            copy_vector(w[W_SD], d, n)
+            copy_vector(w[W_SV], v, n)
+            copy_vector(w[W_SA], a, n)
             e_in, e_hyst, e_visc = s_in, s_hyst, s_visc
             cur = s_cur
             if saved:
                 copy_rows(st_save, st[cur])
             level += 1
 
-        if not (math.isfinite(d0) and math.isfinite(d1) and math.isfinite(d2)
-                and math.isfinite(a0) and math.isfinite(a1) and math.isfinite(a2)):
+        finite = True
+        for i in range(n):
+            finite = finite and math.isfinite(d[i]) and math.isfinite(a[i])
+        if not finite:
             _fail(info, NONFINITE, -1, t0 + (j + 1) * h_c)
             return row
 
         if (j + 1) % nsub_c == 0:
-            out_d[row, 0] = d0
-            out_d[row, 1] = d1
-            out_d[row, 2] = d2
-            out_v[row, 0] = v0
-            out_v[row, 1] = v1
-            out_v[row, 2] = v2
+            for i in range(n):
+                out_d[row, i] = d[i]
+                out_v[row, i] = v[i]
             for e in range(ne):
                 out_u[row, e] = st[cur, e, U]
                 out_f[row, e] = st[cur, e, F]
             out_e[row, E_IN] = e_in
-            out_e[row, E_KIN] = 0.5 * (mass[0] * v0 * v0 + mass[1] * v1 * v1 + mass[2] * v2 * v2)
+            kinetic = mass[0] * v[0] * v[0]
+            for i in range(1, n):
+                kinetic += mass[i] * v[i] * v[i]
+            out_e[row, E_KIN] = 0.5 * kinetic
             out_e[row, E_HYST] = e_hyst
             out_e[row, E_VISC] = e_visc
             row += 1
 
-    x[X_D] = d0
-    x[X_D + 1] = d1
-    x[X_D + 2] = d2
-    x[X_V] = v0
-    x[X_V + 1] = v1
-    x[X_V + 2] = v2
-    x[X_A] = a0
-    x[X_A + 1] = a1
-    x[X_A + 2] = a2
+    for i in range(n):
+        x[X_Q + i] = d[i]
+        x[X_Q + n + i] = v[i]
+        x[X_Q + 2 * n + i] = a[i]
     x[X_E_IN] = e_in
     x[X_E_HYST] = e_hyst
     x[X_E_VISC] = e_visc
