@@ -34,3 +34,41 @@ def test_measured_loop_is_drawn_over_the_fit_as_markers(tmp_path):
     assert data.get_marker() not in (None, "None", "", " ") and data.get_linestyle() in ("None", "", " ")
     assert data.get_color() != fit.get_color()
     assert (tmp_path / "loops.png").stat().st_size > 0
+
+
+# ---------------------------------------------------------------- transmissibility.png
+
+
+class _Stepped:
+    """What plot_transmissibility reads of a stepped-sine result."""
+
+    direction = "x1"
+    columns = ("T_G_x1", "T_G_x2", "T_top_x1", "T_top_x2")
+
+    def __init__(self, frequencies):
+        f = np.asarray(frequencies, float)
+        t = 1.0 / np.abs(1.0 - (f / 8.0) ** 2 + 0.1j * f / 8.0)
+        self._table = np.column_stack([f, np.full(f.size, 0.98), t, 1e-3 * t, 1.2 * t, 0.05 * t])
+
+    def table(self):
+        return self._table
+
+
+def _tick_texts(ax):
+    return [t.get_text() for axis in (ax.xaxis, ax.yaxis)
+            for t in axis.get_ticklabels(which="both") if t.get_text()]
+
+
+@pytest.mark.parametrize("frequencies", [np.geomspace(2.0, 20.0, 7), np.geomspace(0.5, 50.0, 12)])
+def test_transmissibility_ticks_are_plain_numbers(tmp_path, frequencies):
+    from rbhyst.report.transmissibility import plot_transmissibility
+
+    fig = plot_transmissibility(_Stepped(frequencies), tmp_path / "t.png", title="a square")
+    for ax in fig.axes:
+        texts = _tick_texts(ax)
+        assert texts, "no tick labels"
+        assert not [t for t in texts if any(s in t for s in ("10^", "times", "×", "$"))], texts
+        for t in texts:
+            float(t.replace("\N{MINUS SIGN}", "-"))  # each a number as written
+    if frequencies[-1] / frequencies[0] < 20:  # within about a decade: 2, 3, 5 ... are labelled
+        assert "2" in [t.get_text() for t in fig.axes[0].xaxis.get_ticklabels(which="both")]
