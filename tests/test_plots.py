@@ -72,3 +72,79 @@ def test_transmissibility_ticks_are_plain_numbers(tmp_path, frequencies):
             float(t.replace("\N{MINUS SIGN}", "-"))  # each a number as written
     if frequencies[-1] / frequencies[0] < 20:  # within about a decade: 2, 3, 5 ... are labelled
         assert "2" in [t.get_text() for t in fig.axes[0].xaxis.get_ticklabels(which="both")]
+
+
+# ---------------------------------------------------------------- spectra.png
+
+
+def _pulse_along_x2(tmp_path):
+    import rbhyst
+    from conftest import square_linear_deck, write_deck
+
+    d = square_linear_deck()
+    d["elements"][2]["point"] = [0.5, 0.1]  # not quite symmetric: rounding reaches x1
+    d["excitation"] = {"support": {"x2": {"type": "half-sine", "amplitude": 10.0, "units": "g",
+                                          "duration": 0.011}}}
+    d["analysis"].update(dt=0.0005, duration=0.5, estimate_error=False)
+    d["output"] = {"points": [{"name": "top", "point": [0.3, 0.5]}],
+                   "spectra": {"damping": [0.05], "periods_s": [0.01, 0.03, 0.1, 0.3]}}
+    return rbhyst.run(write_deck(tmp_path, d)).spectra
+
+
+def test_a_direction_of_rounding_gets_no_panel_but_a_plain_line(tmp_path):
+    from rbhyst.report.spectra import NEGLIGIBLE, plot_spectra, shown_directions
+
+    spectra = _pulse_along_x2(tmp_path)
+    x1 = max(float(spectra.sa(loc, "x1").max()) for loc in ("G", "top"))
+    x2 = max(float(spectra.sa(loc, "x2").max()) for loc in ("ground", "G", "top"))
+    assert x1 < NEGLIGIBLE * x2 and x2 > 50.0  # the scene: a 10 g pulse, nothing across it
+    assert shown_directions(spectra) == (["x2"], {"x1": x1})
+    fig = plot_spectra(spectra, tmp_path / "spectra.png", title="pulse")
+    titles = [ax.get_title() for ax in fig.axes if ax.get_title()]
+    assert titles == ["along x2"]
+    assert "no response along x1" in fig._suptitle.get_text().replace("\n", " ")
+    legend = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
+    assert not [t for t in legend if "Nyquist" in t]  # an analytic pulse has no sample step
+
+
+def test_both_directions_of_a_real_response_keep_their_panels(tmp_path):
+    from rbhyst.report.spectra import shown_directions
+
+    spectra = _pulse_along_x2(tmp_path)
+    from rbhyst.response.located import LocatedSpectra
+    from rbhyst.response.spectra import Spectrum
+
+    s = spectra.spectrum
+    sa = s.sa.copy()
+    sa[:, :, [spectra.index(loc, "x1") for loc in ("G", "top")]] = 1e-6 * sa.max()  # small but real
+    moved = LocatedSpectra(spectra.signals, Spectrum(periods=s.periods, dampings=s.dampings, dt=s.dt,
+                                                     samples=s.samples, sd=s.sd, sa=sa))
+    assert shown_directions(moved) == (["x2", "x1"], {})
+
+
+def test_the_nyquist_frequency_of_a_record_is_marked(tmp_path):
+    from conftest import DECKS
+    from rbhyst.report.spectra import plot_spectra
+    from rbhyst.response.record import record_spectrum
+
+    spectra = record_spectrum(DECKS / "records" / "synthetic_x1.csv", "g")  # 0.01 s samples
+    assert spectra.nyquist_hz() == pytest.approx(50.0) and spectra.nyquist_hz("x1") == pytest.approx(50.0)
+    fig = plot_spectra(spectra, tmp_path / "spectra.png")
+    legend = [t.get_text() for t in fig.axes[0].get_legend().get_texts()]
+    assert [t for t in legend if "Nyquist" in t and "50 Hz" in t], legend
+
+
+def test_a_runs_ground_records_carry_their_sample_step(tmp_path):
+    import shutil
+
+    import rbhyst
+    from conftest import DECKS, seed_deck, write_deck
+
+    shutil.copytree(DECKS / "records", tmp_path / "records")
+    d = seed_deck(duration=0.3, estimate_error=False)
+    d["excitation"]["support"]["x1"] = {"file": "records/synthetic_x1.csv", "units": "g"}  # x2 stays a sine
+    d["output"] = {"spectra": {"periods_s": [0.01, 0.1]}}
+    spectra = rbhyst.run(write_deck(tmp_path, d)).spectra
+    assert spectra.record_dt == (("x1", 0.01),)
+    assert spectra.nyquist_hz("x1") == pytest.approx(50.0)
+    assert spectra.nyquist_hz("x2") == pytest.approx(50.0)  # the body feels the x1 record there too
