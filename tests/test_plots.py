@@ -148,3 +148,61 @@ def test_a_runs_ground_records_carry_their_sample_step(tmp_path):
     assert spectra.record_dt == (("x1", 0.01),)
     assert spectra.nyquist_hz("x1") == pytest.approx(50.0)
     assert spectra.nyquist_hz("x2") == pytest.approx(50.0)  # the body feels the x1 record there too
+
+
+# ---------------------------------------------------------------- element_loops.png, model.png, energy.png
+
+
+def _drawn(fig):
+    """The figure drawn under rbhyst's style, and its renderer (text extents in pixels)."""
+    import matplotlib
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    from rbhyst.report._style import STYLE
+
+    with matplotlib.rc_context(STYLE):
+        FigureCanvasAgg(fig)
+        fig.canvas.draw()
+    return fig.canvas.get_renderer()
+
+
+def _x_tick_gaps(ax, renderer) -> list[float]:
+    lo, hi = sorted(ax.get_xlim())
+    shown = [t for t, x in zip(ax.get_xticklabels(), ax.get_xticks()) if lo <= x <= hi and t.get_text()]
+    boxes = sorted((t.get_window_extent(renderer) for t in shown), key=lambda b: b.x0)
+    return [b.x0 - a.x1 for a, b in zip(boxes, boxes[1:])]
+
+
+@pytest.fixture(scope="module")
+def machine():
+    import rbhyst
+    from conftest import DECKS
+
+    return rbhyst.run(DECKS / "machine_on_mounts.toml")
+
+
+def test_element_loop_tick_labels_keep_apart(machine, tmp_path):
+    """The machine's mount e3 moves 0.1 mm: six labels -0.10 ... 0.15 ran together."""
+    from rbhyst.report.run import plot_element_loops
+
+    fig = plot_element_loops(machine, tmp_path / "element_loops.png")
+    renderer = _drawn(fig)
+    em = renderer.points_to_pixels(9.0)
+    for ax in fig.axes:
+        if ax.get_visible():
+            gaps = _x_tick_gaps(ax, renderer)
+            assert gaps and min(gaps) >= em, (ax.get_title(), gaps)
+
+
+def test_stroke_limits_have_a_legend(tmp_path):
+    import rbhyst
+    from conftest import seed_deck, write_deck
+    from rbhyst.report.run import plot_element_loops
+
+    d = seed_deck(duration=0.2, estimate_error=False)
+    d["elements"][0]["stroke"] = [-0.01, 0.015]
+    res = rbhyst.run(write_deck(tmp_path, d))
+    fig = plot_element_loops(res, tmp_path / "element_loops.png")
+    first, second = fig.axes[:2]
+    assert [t.get_text() for t in first.get_legend().get_texts()] == ["stroke limits -10, +15 mm"]
+    assert second.get_legend() is None  # no stroke, nothing to explain

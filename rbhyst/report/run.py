@@ -8,7 +8,9 @@ from pathlib import Path
 import numpy as np
 
 from ..results import Result
-from ._style import TIME_MARGINS, save, styled, subplots
+from matplotlib.ticker import MaxNLocator
+
+from ._style import TIME_MARGINS, plain_number, save, styled, subplots
 
 
 def _draw_outline(ax, v: np.ndarray, fill_alpha: float, labels: list[str]) -> None:
@@ -135,8 +137,9 @@ def plot_point(result: Result, name: str, path: Path) -> None:
 
 
 @styled
-def plot_element_loops(result: Result, path: Path) -> None:
-    """Force against deformation of each distinct element (seed Fig. 4 style)."""
+def plot_element_loops(result: Result, path: Path):
+    """Force against deformation of each distinct element (seed Fig. 4 style), the stroke
+    limits dashed with a legend. Returns the figure (saved to ``path``)."""
     system = result.system
     sample = result.plot.sample
     n = len(system.elements)
@@ -150,16 +153,25 @@ def plot_element_loops(result: Result, path: Path) -> None:
         f = sample[:, result.columns.index(f"e{k + 1}_f_N")]
         ax.plot(u * 1e3, f * 1e-3, lw=0.7)
         if el.stroke is not None:  # the stroke it can take
+            lo, hi = el.stroke
             for limit in el.stroke:
-                ax.axvline(limit * 1e3, color="C3", lw=0.9, ls="--")
+                ax.axvline(limit * 1e3, color="C3", lw=0.9, ls="--",
+                           label=f"stroke limits {plain_number(lo * 1e3)}, +{plain_number(hi * 1e3)} mm"
+                           if limit == lo else None)
+            ax.legend(fontsize=6.5, loc="best", framealpha=0.9)
         label = f"e{k + 1}" if el.count == 1 else f"e{k + 1}-e{k + el.count} (each)"
         ax.set_title(f"{label}: {el.hysteresis}, {el.angle_deg:g}°", fontsize=8)
         ax.set_xlabel("u [mm]")
         ax.set_ylabel("f [kN]")
+        # at most five labelled ticks a side: "-0.10 -0.05 0.00 0.05 0.10 0.15" runs together
+        # in a panel this narrow
+        ax.xaxis.set_major_locator(MaxNLocator(nbins=4, steps=[1, 2, 2.5, 5, 10], min_n_ticks=3))
+        ax.yaxis.set_major_locator(MaxNLocator(nbins=6, steps=[1, 2, 2.5, 5, 10]))
         k += el.count
     for ax in axes.flat[n:]:
         ax.set_visible(False)
     save(fig, path)
+    return fig
 
 
 @styled
