@@ -206,3 +206,57 @@ def test_stroke_limits_have_a_legend(tmp_path):
     first, second = fig.axes[:2]
     assert [t.get_text() for t in first.get_legend().get_texts()] == ["stroke limits -10, +15 mm"]
     assert second.get_legend() is None  # no stroke, nothing to explain
+
+
+def _boxes_overlap(a, b) -> bool:
+    return a.x0 < b.x1 and b.x0 < a.x1 and a.y0 < b.y1 and b.y0 < a.y1
+
+
+def _line_points(ax, step: float = 1.0):
+    """Points every ``step`` pixels along every line drawn on ``ax`` (outline, elements, dampers)."""
+    out = []
+    for ln in ax.get_lines():
+        px = ax.transData.transform(ln.get_xydata())
+        for a, b in zip(px[:-1], px[1:]):
+            n = max(2, int(np.hypot(*(b - a)) / step) + 1)
+            out.append(a + (b - a) * np.linspace(0.0, 1.0, n)[:, None])
+    return np.vstack(out)
+
+
+CABINET_DAMPERS = [{"part": 1, "vertex": 1, "angle_deg": 270.0, "c": 800.0, "count": 2},
+                   {"part": 1, "vertex": 2, "angle_deg": 0.0, "c": 800.0},
+                   {"part": 1, "vertex": 4, "angle_deg": 200.0, "c": 800.0}]
+SEED_DAMPERS = [{"vertex": 1, "angle_deg": 0.0, "c": 800.0}, {"vertex": 2, "angle_deg": 90.0, "c": 800.0, "count": 2},
+                {"vertex": 3, "angle_deg": 45.0, "c": 300.0}, {"point": [0.0, 0.0], "angle_deg": 30.0, "c": 100.0}]
+
+
+@pytest.mark.parametrize("deck, dampers", [("cabinet_transformer.toml", CABINET_DAMPERS),
+                                           ("seed_wri.toml", SEED_DAMPERS)], ids=["cabinet", "seed"])
+def test_model_labels_cover_no_other_label_nor_a_line(tmp_path, deck, dampers):
+    """Dampers at the elements' corners, along their lines and across them: every label clear of
+    the others and of every line drawn (the body's outline, the elements, the dampers)."""
+    import shutil
+    import tomllib
+
+    import rbhyst
+    from conftest import DECKS, write_deck
+    from rbhyst.report.run import plot_body
+
+    shutil.copytree(DECKS / "records", tmp_path / "records")
+    d = tomllib.loads((DECKS / deck).read_text())
+    d["analysis"].update(duration=0.05, estimate_error=False)
+    d["dampers"] = dampers
+    fig = plot_body(rbhyst.run(write_deck(tmp_path, d)), tmp_path / "model.png")
+    renderer = _drawn(fig)
+    ax = fig.axes[0]
+    texts = [t for t in ax.texts if t.get_text() and not t.get_text().startswith("part")]
+    names = [t.get_text() for t in texts]
+    assert len([n for n in names if n.startswith("d")]) == len(dampers) and len(names) == len(set(names))
+    boxes = [t.get_window_extent(renderer) for t in texts]
+    clashes = [(names[i], names[j]) for i in range(len(boxes)) for j in range(i) if _boxes_overlap(boxes[i], boxes[j])]
+    assert not clashes
+    points = _line_points(ax)
+    crossed = [n for n, b in zip(names, boxes)
+               if np.any((points[:, 0] > b.x0 + 1) & (points[:, 0] < b.x1 - 1) & (points[:, 1] > b.y0 + 1)
+                         & (points[:, 1] < b.y1 - 1))]
+    assert not crossed

@@ -6,28 +6,49 @@ import math
 from pathlib import Path
 
 import numpy as np
-
-from ..results import Result
 from matplotlib.ticker import MaxNLocator
 
+from ..results import Result
+from ._labels import Labels
 from ._style import TIME_MARGINS, plain_number, save, styled, subplots
 
 
-def _draw_outline(ax, v: np.ndarray, fill_alpha: float, labels: list[str]) -> None:
+def _draw_outline(ax, v: np.ndarray, fill_alpha: float, labels: list[str], placer: Labels) -> None:
+    """The polygon, each vertex labelled outside it, along the bisector of its corner if that
+    place is free."""
     closed = np.vstack([v, v[:1]])
     ax.fill(closed[:, 0], closed[:, 1], color="0.2", alpha=fill_alpha, lw=0, zorder=1)
     ax.plot(closed[:, 0], closed[:, 1], color="0.2", lw=1.2, zorder=2)
-    for label, (x, y) in zip(labels, v):
-        ax.annotate(label, (x, y), textcoords="offset points", xytext=(4, 4), fontsize=8, color="0.3")
+    placer.line(closed)
+    n = len(v)
+    for i, (label, point) in enumerate(zip(labels, v)):
+        into = []  # unit vectors along the two edges that meet here
+        for j in (i - 1, (i + 1) % n):
+            e = v[j] - point
+            into.append(e / (np.linalg.norm(e) or 1.0))
+        out = -(into[0] + into[1])
+        if np.linalg.norm(out) < 1e-9:  # a straight angle: outward is the normal of the edge
+            out = np.array([into[1][1], -into[1][0]])
+        placer.add(label, point, out, fontsize=8, color="0.3")
+
+
+def _shares_line(dp, elements) -> bool:
+    """Whether an element acts at the damper's point along the same line (their drawings
+    would fall on each other)."""
+    return any(math.dist(el.x, dp.x) < 1e-9 and abs(math.sin(math.radians(el.angle_deg - dp.angle_deg))) < 1e-6
+               for el in elements)
 
 
 @styled
-def plot_body(result: Result, path: Path) -> None:
+def plot_body(result: Result, path: Path):
     """The body (every part, the denser darker, with its mass), its mass centre G and its
-    elements (seed Fig. 3a)."""
+    elements (seed Fig. 3a); a damper on an element's line is drawn beside it, in parallel;
+    no label covers another (rbhyst.report._labels). Returns the figure (saved to ``path``)."""
     system = result.system
     body = system.body
     fig, ax = subplots(figsize=(5.5, 5.5))
+    vertex_labels, labels = Labels(), Labels()  # the elements' and dampers' labels first
+    fixed = []
     if body.form == "parts":
         # overlapping fills add up: a dense unit inside a shell shows darker
         density = [p.mass / p.area for p in body.parts]
@@ -35,15 +56,15 @@ def plot_body(result: Result, path: Path) -> None:
         for k, (part, rho) in enumerate(zip(body.parts, density), start=1):
             prefix = f"{k}." if several else "P"
             _draw_outline(ax, part.vertices, 0.08 + 0.3 * rho / max(density),
-                          [f"{prefix}{i}" for i in range(1, len(part.vertices) + 1)])
+                          [f"{prefix}{i}" for i in range(1, len(part.vertices) + 1)], vertex_labels)
             c = part.centroid - body.mass_centre
-            ax.annotate(f"part {k}\n{part.mass:.4g} kg", c, ha="center", va="center", fontsize=7,
-                        color="0.1", zorder=3)
+            fixed.append(ax.annotate(f"part {k}\n{part.mass:.4g} kg", c, ha="center", va="center", fontsize=7,
+                                     color="0.1", zorder=3))
     else:
         v = body.outlines[0]
-        _draw_outline(ax, v, 0.1, [f"P{i}" for i in range(1, len(v) + 1)])
+        _draw_outline(ax, v, 0.1, [f"P{i}" for i in range(1, len(v) + 1)], vertex_labels)
     ax.plot(0, 0, "k+", ms=10, zorder=3)
-    ax.annotate("G", (0, 0), textcoords="offset points", xytext=(5, -10))
+    labels.point(0.0, 0.0, 5.0)
     v = np.vstack(body.outlines)
     size = float(np.ptp(v, axis=0).max())
     length = 0.18 * size
@@ -53,25 +74,42 @@ def plot_body(result: Result, path: Path) -> None:
         a = math.radians(el.angle_deg)
         # along its line of action, on the side away from G: clear of the body's outline
         side = 1.0 if x * math.cos(a) + y * math.sin(a) >= 0.0 else -1.0
-        ex, ey = x + side * length * math.cos(a), y + side * length * math.sin(a)
+        ux, uy = side * math.cos(a), side * math.sin(a)
+        ex, ey = x + length * ux, y + length * uy
         ax.plot([ex, x], [ey, y], color="C0", lw=2.5, solid_capstyle="round", zorder=4)
         ax.plot(ex, ey, marker="s", color="C0", ms=5, zorder=4)
+        labels.line([[x, y], [ex, ey]])
+        labels.point(ex, ey, 2.5)
         label = f"e{k}" if el.count == 1 else f"e{k}-{k + el.count - 1}"
-        ax.annotate(label, (ex, ey), textcoords="offset points", xytext=(-6, -11), fontsize=7, color="C0")
+        labels.add(label, (ex, ey), (ux, uy), 4.5, fontsize=7, color="C0")  # beyond its free end
         k += el.count
     for k, dp in enumerate(system.dampers, start=1):
         x, y = dp.x
         a = math.radians(dp.angle_deg)
         side = 1.0 if x * math.cos(a) + y * math.sin(a) >= 0.0 else -1.0
-        ex, ey = x + side * 0.8 * length * math.cos(a), y + side * 0.8 * length * math.sin(a)
-        ax.plot([ex, x], [ey, y], color="C2", lw=1.5, ls="--", zorder=4)
-        ax.plot((ex + x) / 2, (ey + y) / 2, marker="D", color="C2", ms=5, zorder=4)
-        ax.annotate(f"d{k}" + (f" x{dp.count}" if dp.count > 1 else ""), (ex, ey), textcoords="offset points",
-                    xytext=(3, 3), fontsize=7, color="C2")
+        ux, uy = side * math.cos(a), side * math.sin(a)
+        # on an element's line it is drawn beside it, in parallel, as a spring and a dashpot are
+        nx, ny = -uy, ux
+        if nx * x + ny * y < 0.0:  # the side away from G
+            nx, ny = -nx, -ny
+        shift = 0.06 * size if _shares_line(dp, system.elements) else 0.0
+        sx, sy = x + shift * nx, y + shift * ny
+        ex, ey = sx + 0.8 * length * ux, sy + 0.8 * length * uy
+        ax.plot([x, sx, ex], [y, sy, ey], color="C2", lw=1.5, ls="--", zorder=4)
+        mid = ((ex + sx) / 2, (ey + sy) / 2)
+        ax.plot(*mid, marker="D", color="C2", ms=5, zorder=4)
+        labels.line([[x, y], [sx, sy], [ex, ey]])
+        labels.point(*mid, 2.5)
+        labels.add(f"d{k}" + (f" x{dp.count}" if dp.count > 1 else ""), mid, (nx, ny), 4.5, fontsize=7,
+                   color="C2")  # off its side, away from the element
+    labels.pending += vertex_labels.pending
+    labels.lines += vertex_labels.lines
+    labels.add("G", (0.0, 0.0), (1.0, -1.0), 5.0, fontsize=9)
     ex = result.system.excitation
     if ex.p1 is not None or ex.p2 is not None or ex.m3 is not None:
         ax.plot(*ex.point, marker="*", color="C3", ms=12, zorder=5)
-        ax.annotate("P (loads)", ex.point, textcoords="offset points", xytext=(6, 6), color="C3")
+        labels.point(*ex.point, 6.0)
+        labels.add("P (loads)", ex.point, (1.0, 1.0), 6.5, color="C3")
     ax.set_aspect("equal")
     ax.margins(0.15)
     ax.set_xlabel("x1 [m]")
@@ -80,7 +118,10 @@ def plot_body(result: Result, path: Path) -> None:
     area = f"A = {body.parts[0].area:.4g} m², " if body.form == "polygon" else ""
     ax.set_title(f"{title}\n{area}m = {system.mass[0]:.6g} kg, J = {system.mass[2]:.6g} kg m² about G",
                  fontsize=9)
-    save(fig, path)
+    fig.tight_layout()
+    labels.place(fig, ax, fixed)
+    fig.savefig(path)
+    return fig
 
 
 def _line(ax, result: Result, name: str, **kw) -> None:
