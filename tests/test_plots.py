@@ -260,3 +260,15 @@ def test_model_labels_cover_no_other_label_nor_a_line(tmp_path, deck, dampers):
                if np.any((points[:, 0] > b.x0 + 1) & (points[:, 0] < b.x1 - 1) & (points[:, 1] > b.y0 + 1)
                          & (points[:, 1] < b.y1 - 1))]
     assert not crossed
+
+
+def test_input_energy_shows_under_the_hysteretic(machine, tmp_path):
+    from rbhyst.report.run import plot_energy
+
+    fig = plot_energy(machine, tmp_path / "energy.png")
+    ax = fig.axes[0]
+    given, hysteretic = _line(ax, "input"), _line(ax, "hysteretic (dissipated + stored)")
+    assert given.get_linewidth() >= 2.5 * hysteretic.get_linewidth()  # a band a dashed line runs in
+    assert hysteretic.get_zorder() > given.get_zorder()
+    assert hysteretic.get_linestyle() != given.get_linestyle()
+    assert given.get_alpha() is not None and given.get_alpha() < 1.0
