@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from rbhyst.calibration import loop_result
+from rbhyst.deck import key_unit
 from rbhyst.hysteresis import parameter_set
 
 
@@ -272,3 +273,135 @@ def test_input_energy_shows_under_the_hysteretic(machine, tmp_path):
     assert hysteretic.get_zorder() > given.get_zorder()
     assert hysteretic.get_linestyle() != given.get_linestyle()
     assert given.get_alpha() is not None and given.get_alpha() < 1.0
+
+
+# ---------------------------------------------------------------- the units of deck keys
+
+
+def _numeric_keys(node, key=""):
+    """Dotted keys (list items from 1) of every number or list of numbers in a deck mapping."""
+    if isinstance(node, dict):
+        for k, v in node.items():
+            yield from _numeric_keys(v, f"{key}.{k}" if key else k)
+    elif isinstance(node, list) and node and all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in node):
+        yield key
+    elif isinstance(node, list):
+        for i, v in enumerate(node, start=1):
+            yield from _numeric_keys(v, f"{key}[{i}]")
+    elif isinstance(node, (int, float)) and not isinstance(node, bool):
+        yield key
+
+
+def test_every_number_of_a_deck_has_a_unit():
+    import tomllib
+
+    from conftest import DECKS, seed_deck
+    from rbhyst.deck import parse_deck
+
+    decks = [tomllib.loads(p.read_text()) for p in sorted(DECKS.glob("*.toml"))]
+    pulse = seed_deck()
+    pulse["excitation"]["support"]["x2"] = {"type": "half-sine", "amplitude": 5.0, "units": "m/s2",
+                                            "duration": 0.01, "start": 0.1}
+    pulse["excitation"]["support"]["x1"].update(ramp_cycles=2.0, cycles=8.0, start=0.0)
+    pulse["body"] = {"mass": 500.0, "mass_centre": [0.1, 0.2], "inertia": 80.0, "gravity": [0.0, -9.81],
+                     "vertices": [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]}
+    pulse["elements"][0]["stroke"] = [-0.01, 0.02]
+    pulse["dampers"] = [{"point": [0.0, 0.0], "angle_deg": 10.0, "c": 5.0, "count": 2}]
+    pulse["output"] = {"every": 2, "points": [{"name": "a", "point": [0.0, 1.0]}],
+                       "spectra": {"damping": [0.05], "periods_s": [0.1]}}
+    decks.append(pulse)
+    missing = set()
+    for data in decks:
+        deck = parse_deck(data).model_dump(mode="python", exclude_none=True)
+        for key in _numeric_keys(deck):
+            if key_unit(key, deck) is None:
+                missing.add(key)
+    assert not missing
+
+
+def test_units_of_keys():
+    data = {"excitation": {"support": {"x1": {"type": "sine", "amplitude": 0.3, "units": "m/s2"}},
+                           "force": {"m3": {"file": "m.csv", "units": "kN m"}}}}
+    assert [key_unit(k, data) for k in (
+        "body.mass", "body.parts[2].mass", "hysteresis.wri_shear.loading.kb", "hysteresis.s.unloading.alpha",
+        "elements[2].count", "elements.1.stroke", "dampers[1].c", "excitation.support.x1.amplitude",
+        "excitation.force.m3.scale", "analysis.duration", "elements[1].hysteresis", "title")] == [
+        "kg", "kg", "N/m", "1/m", "", "m", "N s/m", "m/s²", "", "s", None, None]
+
+
+# ---------------------------------------------------------------- ida.png, vary.png
+
+
+def _sweep_table(masses, kbs, levels=(0.5, 1.0, 1.5), motions=("a", "b")):
+    """A cases table as rbhyst sweep writes it: peaks that grow with the level and the mass."""
+    header = ["case", "motion", "scale", "body.mass", "hysteresis.s.loading.kb", "status", "message",
+              "peak_u1_m", "peak_u2_m", "peak_theta3_rad", "peak_at1_m_s2", "peak_at2_m_s2", "peak_e1_f_N"]
+    rows, n = [], 0
+    for i, m in enumerate(motions):
+        for s in levels:
+            for mass in masses:
+                for kb in kbs:
+                    n += 1
+                    u = 1e-3 * s * (1 + i / 10) * mass / 800 * 2e5 / kb
+                    rows.append([n, m, s, repr(mass), repr(kb), "ok", "", u, 0.5 * u, 1e-4 * s, 3.0 * s, 2.0 * s,
+                                 100.0 * s])
+    return header, rows
+
+
+UNITS = {"body.mass": "kg", "hysteresis.s.loading.kb": "N/m"}
+
+
+def test_ida_tells_nine_combinations_apart_by_colour_and_line_style(tmp_path):
+    from rbhyst.report.sweep import plot_ida, write_plots
+
+    header, rows = _sweep_table([700.0, 815.773, 900.0], [2e5, 2.2e5, 2.4e5])
+    assert write_plots(header, rows, list(UNITS), "factors", tmp_path, UNITS) == ["ida.png", "vary.png"]
+    from rbhyst.report.sweep import _records
+
+    ok = _records(header, rows, list(UNITS))
+    fig = plot_ida(ok, ["peak_u1_m", "peak_at1_m_s2"], list(UNITS), "scale factor", tmp_path / "ida.png", UNITS)
+    panel, cell = fig.axes[0], fig.axes[2]
+    styles = {(ln.get_color(), ln.get_linestyle()) for ln in panel.get_lines()}
+    assert len(panel.get_lines()) == 9 and len(styles) == 9  # every combination, each its own look
+    legend = [t.get_text() for t in cell.get_legend().get_texts()]
+    assert legend == ["body.mass [kg]:", "  700", "  815.773", "  900", "hysteresis.s.loading.kb [N/m]:",
+                      "  200000", "  220000", "  240000", "(median over the motions)"]
+    assert "84th percentiles in stats.csv" in fig._suptitle.get_text()
+
+
+def test_ida_of_one_combination_shows_each_motion_median_and_84th(tmp_path):
+    from rbhyst.report.sweep import _records, plot_ida
+
+    header, rows = _sweep_table([800.0], [2e5])
+    fig = plot_ida(_records(header, rows, []), ["peak_u1_m"], [], "scale factor", tmp_path / "ida.png")
+    assert [t.get_text() for t in fig.axes[1].get_legend().get_texts()] == [
+        "each motion", "median over the motions", "84th percentile"]
+    assert len(fig.axes[0].get_lines()) == 2 + 2  # two motions, the median, the 84th percentile
+
+
+def test_vary_shows_displacements_and_accelerations_against_keys_with_units(tmp_path):
+    from rbhyst.report.sweep import VARY_PEAKS, _records, plot_vary
+
+    header, rows = _sweep_table([700.0, 900.0], [2e5, 2.4e5])
+    fig = plot_vary(_records(header, rows, list(UNITS)), list(VARY_PEAKS), list(UNITS), "scale factor",
+                    tmp_path / "vary.png", UNITS)
+    assert [ax.get_ylabel() for ax in fig.axes[:4]] == ["peak |u1| [m]", "peak |u2| [m]", "peak |at1| [m/s²]",
+                                                        "peak |at2| [m/s²]"]
+    assert {ax.get_xlabel() for ax in fig.axes} == {"body.mass [kg]", "hysteresis.s.loading.kb [N/m]"}
+
+
+def test_a_sweeps_keys_get_their_units_from_its_deck(tmp_path):
+    import tomli_w
+
+    from conftest import seed_deck, write_deck
+    from rbhyst.sweep import load_sweep
+    from rbhyst.sweep.runner import _vary_units
+
+    write_deck(tmp_path, seed_deck(duration=0.1), name="base")
+    (tmp_path / "sweep.toml").write_text(tomli_w.dumps({
+        "deck": "base.toml",
+        "motions": [{"name": "s", "x1": {"type": "sine", "amplitude": 0.3, "frequency_hz": 2.0, "units": "g"}}],
+        "vary": {"body.mass": [700.0, 800.0], "excitation.support.x1.amplitude": [0.1, 0.2],
+                 "elements[1].count": [1, 2]}}))
+    assert _vary_units(load_sweep(tmp_path / "sweep.toml")) == {
+        "body.mass": "kg", "excitation.support.x1.amplitude": "g", "elements[1].count": ""}

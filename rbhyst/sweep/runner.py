@@ -265,7 +265,21 @@ def _write(outcome: Outcome, journal: Journal, save_histories: bool, plots: bool
         if plots:
             from ..report.sweep import write_plots
 
-            write_plots(header, rows, sweep.vary_keys, sweep.scale_kind, tmp)
+            write_plots(header, rows, sweep.vary_keys, sweep.scale_kind, tmp, _vary_units(sweep))
+
+
+def _vary_units(sweep) -> dict[str, str | None]:
+    """The unit of each vary key, from the first case's deck (a signal's amplitude takes the
+    units of its motion)."""
+    from ..deck import key_unit
+
+    data = sweep.base.data
+    if sweep.cases:
+        try:
+            data = sweep.base.deck().with_values(sweep.cases[0].values).model_dump(mode="python")
+        except InputError:
+            pass
+    return {k: key_unit(k, data) for k in sweep.vary_keys}
 
 
 def _about(outcome: Outcome) -> dict:
