@@ -90,6 +90,10 @@ def run(
     for warning in result.warnings:
         say(f"warning: {warning}")
     say(run_line(result))
+    from .report.console import element_table
+
+    for line in element_table(result.summary()):
+        say(line)
     say(f"wrote {target}")
 
 

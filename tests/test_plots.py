@@ -405,3 +405,69 @@ def test_a_sweeps_keys_get_their_units_from_its_deck(tmp_path):
                  "elements[1].count": [1, 2]}}))
     assert _vary_units(load_sweep(tmp_path / "sweep.toml")) == {
         "body.mass": "kg", "excitation.support.x1.amplitude": "g", "elements[1].count": ""}
+
+
+# ---------------------------------------------------------------- the console's elements
+
+
+def test_run_prints_one_row_per_element_with_summary_numbers(tmp_path):
+    import json
+
+    from conftest import invoke, seed_deck, write_deck
+
+    d = seed_deck(duration=0.5, estimate_error=False)
+    d["elements"][0]["stroke"] = [-0.01, 0.015]
+    d["elements"][3]["stroke"] = 0.002
+    code, err = invoke("run", write_deck(tmp_path, d), "--out", tmp_path / "out", "--no-plots")
+    assert code == 0, err
+    lines = err.splitlines()
+    assert lines[-1] == f"wrote {tmp_path / 'out'}" and lines[-8].startswith("chang, dt = 0.001 s")
+    assert lines[-7] == "elements (peaks over the run):"
+    assert lines[-6].split() == ["element", "set", "angle", "[deg]", "peak", "|f|", "[kN]", "peak", "u", "[mm]",
+                                 "stroke", "[mm]", "used"]
+    assert len({len(line) for line in lines[-6:-1]}) <= 2  # aligned (the last column may be shorter)
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    table = [line.replace("(each)", "").split() for line in lines[-5:-1]]
+    assert [r[0] for r in table] == ["e1-e2", "e3-e4", "e5-e6", "e7-e8"]  # one row per [[elements]] entry
+    for k, (row, el) in enumerate(zip(table, summary["elements"])):
+        first = 1 + 2 * k
+        assert row[1] == el["hysteresis"] and float(row[2]) == el["angle_deg"]
+        assert float(row[3]) == pytest.approx(summary["peaks"][f"e{first}_f_N"] / 1e3, rel=1e-3)
+        u = summary["extremes"][f"e{first}_u_m"]
+        expect = el["stroke"]["peak_deformation_m"] if "stroke" in el else max(u["max"], u["min"], key=abs)
+        assert float(row[4]) == pytest.approx(expect * 1e3, rel=1e-3)
+        if "stroke" in el:
+            lo, hi = el["stroke"]["limits_m"]
+            assert row[5:7] == [f"{lo * 1e3:g},", f"+{hi * 1e3:g}"]
+            assert float(row[7].rstrip("%")) == pytest.approx(100 * el["stroke"]["utilization"], rel=0.05)
+        else:
+            assert row[5:] == ["-", "-"]
+
+
+def test_many_elements_show_the_most_loaded_and_say_how_many_more():
+    from rbhyst.report.console import element_table
+
+    n = 20
+    used = [0.25 * (k % 7) for k in range(n)]  # up to 150 %
+    summary = {"elements": [{"hysteresis": "s", "angle_deg": 0.0, "count": 1,
+                             "stroke": {"limits_m": [-0.01, 0.01], "peak_deformation_m": 0.01 * u, "utilization": u}}
+                            for u in used],
+               "peaks": {f"e{k + 1}_f_N": 100.0 + k for k in range(n)},
+               "extremes": {f"e{k + 1}_u_m": {"max": 0.01 * u, "min": 0.0} for k, u in enumerate(used)}}
+    lines = element_table(summary)
+    assert lines[0] == "elements: the 8 most loaded of 20 (stroke used, then peak force):"
+    assert lines[-1] == "  ... and 12 more (every element in summary.json)"
+    rows = [line.split() for line in lines[2:-1]]
+    assert len(rows) == 8 and [r[0] for r in rows] == ["e14", "e7", "e20", "e13", "e6", "e19", "e12", "e5"]
+    assert [r[-1] for r in rows] == ["over"] * 5 + ["100%"] * 3 and rows[0][-2] == "150%"
+    assert len({line.index("%") for line in lines[2:-1]}) == 1  # the percentages aligned
+
+
+def test_no_stroke_no_stroke_columns():
+    from rbhyst.report.console import element_table
+
+    summary = {"elements": [{"hysteresis": "m", "angle_deg": 45.0, "count": 1}],
+               "peaks": {"e1_f_N": 602.2}, "extremes": {"e1_u_m": {"max": 0.001, "min": -0.007011}}}
+    assert element_table(summary) == ["elements (peaks over the run):",
+                                      "  element  set  angle [deg]  peak |f| [N]  peak u [mm]",
+                                      "  e1       m             45         602.2       -7.011"]
