@@ -110,11 +110,10 @@ def test_a_direction_of_rounding_gets_no_panel_but_a_plain_line(tmp_path):
 
 def test_both_directions_of_a_real_response_keep_their_panels(tmp_path):
     from rbhyst.report.spectra import shown_directions
-
-    spectra = _pulse_along_x2(tmp_path)
     from rbhyst.response.located import LocatedSpectra
     from rbhyst.response.spectra import Spectrum
 
+    spectra = _pulse_along_x2(tmp_path)
     s = spectra.spectrum
     sa = s.sa.copy()
     sa[:, :, [spectra.index(loc, "x1") for loc in ("G", "top")]] = 1e-6 * sa.max()  # small but real
@@ -352,12 +351,10 @@ UNITS = {"body.mass": "kg", "hysteresis.s.loading.kb": "N/m"}
 
 
 def test_ida_tells_nine_combinations_apart_by_colour_and_line_style(tmp_path):
-    from rbhyst.report.sweep import plot_ida, write_plots
+    from rbhyst.report.sweep import _records, plot_ida, write_plots
 
     header, rows = _sweep_table([700.0, 815.773, 900.0], [2e5, 2.2e5, 2.4e5])
     assert write_plots(header, rows, list(UNITS), "factors", tmp_path, UNITS) == ["ida.png", "vary.png"]
-    from rbhyst.report.sweep import _records
-
     ok = _records(header, rows, list(UNITS))
     fig = plot_ida(ok, ["peak_u1_m", "peak_at1_m_s2"], list(UNITS), "scale factor", tmp_path / "ida.png", UNITS)
     panel, cell = fig.axes[0], fig.axes[2]

@@ -1,1 +1,1 @@
-"""Plots: the only package that imports matplotlib (Agg backend, PNG files)."""
+"""Plots (the only package that imports matplotlib, Agg backend, PNG files) and the console's tables."""
