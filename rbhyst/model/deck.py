@@ -20,6 +20,7 @@ from pydantic import (BaseModel, ConfigDict, Discriminator, Field, PrivateAttr, 
 from pydantic_core import PydanticCustomError
 
 from rbhyst.errors import InputError
+from rbhyst.model.integrators import INTEGRATORS
 from rbhyst.model.periods import default_periods
 from rbhyst.files.textfiles import read_text
 from rbhyst.model.hysteresis import limiting_curve, limiting_slope, parameter_set, reversal_stiffness
@@ -35,9 +36,6 @@ AccelUnits = Literal["g", "m/s2", "cm/s2"]
 ForceUnits = Literal["N", "kN"]
 MomentUnits = Literal["N m", "kN m"]
 U = TypeVar("U")
-
-#: the integrators by name (rbhyst.solve.integrators implements each), the default first
-INTEGRATORS = ("chang", "central-difference", "newmark", "kr-alpha", "reference", "adaptive")
 
 
 class _Model(BaseModel):
