@@ -382,9 +382,10 @@ def sweep(
     with user_errors():
         sw = load_sweep(sweep_file)
         target = out if out is not None else sw.default_out()
+        from .kernels.compiled import ahead_of_time
         from .kernels.loop import run_chunk
 
-        if scheduler is None and not kernels.cached([run_chunk]):
+        if scheduler is None and not ahead_of_time() and not kernels.cached([run_chunk]):
             say("note: compiling the numba kernels, once (a minute at most); the workers load them from the cache")
             from .api import run as _run
 
