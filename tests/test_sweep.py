@@ -513,3 +513,38 @@ def test_dask_cluster_gives_the_local_results(project):
     assert f"computed 8 on {cluster.scheduler_address} (2 worker threads)" in err
     assert (project / "dask" / "cases.csv").read_bytes() == (project / "local" / "cases.csv").read_bytes()
     assert (project / "dask" / "stats.csv").read_bytes() == (project / "local" / "stats.csv").read_bytes()
+
+
+# ---------------------------------------------------------------- when things go wrong
+
+
+def killer_sweep(project: Path, masses: list[float]) -> Path:
+    return write_sweep(project, {"deck": "seed_wri.toml",
+                                 "vary": {"body.mass": masses, "analysis.duration": [1.0]}})
+
+
+def test_a_case_that_kills_its_worker_is_failed_and_the_others_finish(project, monkeypatch):
+    import sweep_faults
+
+    from rbhyst.sweep import backends
+
+    monkeypatch.setattr(backends, "run_batch", sweep_faults.run_batch_or_die)
+    masses = [700.0 + 10 * k for k in range(9)]
+    masses.insert(4, sweep_faults.KILLER_MASS)
+    sweep = killer_sweep(project, masses)
+    t0 = time.perf_counter()
+    code, err = invoke("sweep", sweep, "--workers", "2", "--no-plots")
+    took = time.perf_counter() - t0
+    assert code == 0, err
+    out = project / "results" / "sweep"
+    rows = read_cases(out / "cases.csv")
+    message = "killed its worker process 3 times (SIGKILL: out of memory?)"
+    assert [r["status"] for r in rows] == ["ok"] * 4 + ["failed"] + ["ok"] * 5
+    assert rows[4]["message"] == message and rows[4]["peak_u1_m"] == ""
+    assert "9 ok, 1 failed; computed 10 on 2 local workers" in err
+    assert f"warning: case 5 (deck, scale 1.0) failed: {message}" in err
+    assert journal_cases(out) == 10  # each case kept once, the failed one too
+    # kept as failed: the same command does not run it again
+    code, err = invoke("sweep", sweep, "--no-plots")
+    assert code == 0 and "computed 0, 10 already in the folder" in err
+    print(f"10 cases, one killing its worker: {took:.1f} s")

@@ -45,6 +45,7 @@ class Outcome:
     reused: int = 0  # cases the folder held already
     missing: list[str] = field(default_factory=list)  # keys lost with a worker
     missing_reason: str = ""
+    missing_rest: str = "the same command computes the rest"  # how they can be computed
     where: str = ""
     t_start: float = 0.0
     t_first: float | None = None  # when the first batch came back (a worker started and ran it)
@@ -145,9 +146,9 @@ def run_sweep(sweep: Sweep, out: str | Path | None = None, workers: int | None =
         outcome.t_end = time.perf_counter()
         if outcome.missing:
             n = len(outcome.missing)
-            raise SweepIncomplete(f"{n} case{'s' * (n != 1)} could not be computed ({outcome.where}: "
-                                  f"{outcome.missing_reason}); the {len(outcome.results)} finished are kept in "
-                                  f"{journal.folder}: the same command computes the rest", outcome)
+            raise SweepIncomplete(f"{n} case{'s' * (n != 1)} could not be computed on {outcome.where}: "
+                                  f"{outcome.missing_reason}; the {len(outcome.results)} finished are kept in "
+                                  f"{journal.folder}: {outcome.missing_rest}", outcome)
         _write(outcome, journal, save_histories, plots)
     finally:
         journal.close()
@@ -157,15 +158,27 @@ def run_sweep(sweep: Sweep, out: str | Path | None = None, workers: int | None =
 def _compute(backend, todo: list[tuple[str, dict]], journal: Journal, outcome: Outcome,
              save_histories: bool, progress: Progress | None) -> None:
     queue = deque(todo)
+    solo: deque = deque()  # cases whose worker died: each runs alone, so that a death names its case
     inflight: dict[object, list[tuple[str, dict]]] = {}
+    alone: set = set()  # the future of a case running alone
     done = failed = 0
     per_case: float | None = None  # seconds a case takes in a worker
     killed = False
     if progress:
         progress(0, 0, len(todo))
+
+    def lose(err: WorkerLost, reason: str | None = None) -> None:
+        outcome.missing_reason = reason or str(err)
+        outcome.missing_rest = err.rest or outcome.missing_rest
+
     try:
-        while queue or inflight:
-            while queue and len(inflight) < backend.slots:
+        while queue or solo or inflight:
+            if solo and not inflight:
+                case = solo.popleft()
+                f = backend.submit([case])
+                inflight[f] = [case]
+                alone.add(f)
+            while queue and not solo and not alone and len(inflight) < backend.slots:
                 n = batch_size(len(queue), backend.workers, per_case)
                 batch = [queue.popleft() for _ in range(n)]
                 f = backend.submit(batch)
@@ -173,30 +186,41 @@ def _compute(backend, todo: list[tuple[str, dict]], journal: Journal, outcome: O
             try:
                 finished = backend.wait(inflight, 0.2)
             except WorkerLost as err:
-                outcome.missing_reason = str(err)
+                lose(err)
                 outcome.missing.extend(k for b in inflight.values() for k, _ in b)
-                outcome.missing.extend(k for k, _ in queue)
+                outcome.missing.extend(k for k, _ in [*solo, *queue])
                 return
             for f in finished:
                 batch = inflight.pop(f)
                 try:
                     results = backend.result(f)
                 except WorkerLost as err:
-                    action = backend.recover()
-                    outcome.missing_reason = str(err)
-                    if action == "requeue":  # the pool is new: every batch in flight runs again
-                        for b in [batch, *inflight.values()]:
-                            queue.extendleft(reversed(b))
+                    r = backend.recover(err, f, batch, inflight, f in alone)
+                    alone.discard(f)
+                    lose(err, r.reason)
+                    if r.all_inflight:  # none of them will answer: r says what to run again
                         inflight.clear()
+                        alone.clear()
+                    queue.extendleft(reversed(r.again))
+                    solo.extend(r.alone)
+                    if r.failed:
+                        _keep(r.failed, journal, outcome, save_histories)
+                        done += len(r.failed)
+                        failed += len(r.failed)
+                        if progress:
+                            progress(done, failed, len(todo))
+                    outcome.missing.extend(k for k, _ in r.lost)
+                    if r.stop:
+                        outcome.missing.extend(k for b in inflight.values() for k, _ in b)
+                        outcome.missing.extend(k for k, _ in [*solo, *queue])
+                        inflight.clear()
+                        solo.clear()
+                        queue.clear()
+                        return
+                    if r.all_inflight:
                         break
-                    if action == "drop":
-                        outcome.missing.extend(k for k, _ in batch)
-                        continue
-                    outcome.missing.extend(k for b in [batch, *inflight.values()] for k, _ in b)
-                    outcome.missing.extend(k for k, _ in queue)
-                    inflight.clear()
-                    queue.clear()
-                    return
+                    continue
+                alone.discard(f)
                 _keep(results, journal, outcome, save_histories)
                 if outcome.t_first is None:
                     outcome.t_first = time.perf_counter()
