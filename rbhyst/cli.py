@@ -365,6 +365,12 @@ def sweep(
     save_histories: Annotated[bool, typer.Option(
         "--save-histories", help="Every case's time history into histories.parquet (needs pyarrow).")] = False,
     plots: Annotated[bool, typer.Option("--plots/--no-plots", help="Write PNG plots.")] = True,
+    tls_ca_file: Annotated[Optional[Path], typer.Option(
+        "--tls-ca-file", help="With a tls:// --scheduler: the CA certificate (PEM) the scheduler's is signed by.")] = None,
+    tls_cert: Annotated[Optional[Path], typer.Option(
+        "--tls-cert", help="With a tls:// --scheduler: this client's certificate (PEM).")] = None,
+    tls_key: Annotated[Optional[Path], typer.Option(
+        "--tls-key", help="With a tls:// --scheduler: this client's private key (PEM), if not in --tls-cert.")] = None,
 ):
     """One deck over motions x scale x deck values: cases.csv, stats.csv, sweep.json, plots.
 
@@ -385,7 +391,10 @@ def sweep(
         from .kernels.compiled import ahead_of_time
         from .kernels.loop import run_chunk
 
-        if scheduler is None and not ahead_of_time() and not kernels.cached([run_chunk]):
+        on_dask = scheduler is not None or (workers is None and getattr(sw.cluster, "scheduler", None) is not None)
+        if on_dask:
+            _quiet_dask()
+        if not on_dask and not ahead_of_time() and not kernels.cached([run_chunk]):
             say("note: compiling the numba kernels, once (a minute at most); the workers load them from the cache")
             from .api import run as _run
 
@@ -418,7 +427,7 @@ def sweep(
             try:
                 outcome = run_sweep(sw, out=target, workers=workers, scheduler=scheduler, fresh=fresh,
                                     save_histories=save_histories, plots=plots, progress=progress,
-                                    started=started)
+                                    started=started, tls_ca_file=tls_ca_file, tls_cert=tls_cert, tls_key=tls_key)
             except SweepIncomplete as err:
                 say(f"error: {err}")
                 raise typer.Exit(EXIT_ANALYSIS) from None
@@ -443,6 +452,20 @@ def sweep(
         if len(bad) > 5:
             say(f"warning: ... and {len(bad) - 5} more failed cases: see cases.csv (status, message)")
     say(f"wrote {target}")
+
+
+def _quiet_dask() -> None:
+    """Dask's own log lines off the console: the command says in its own lines what went wrong
+    (the workers keep their logs)."""
+    import logging
+
+    try:
+        import distributed  # noqa: F401  (it sets up its loggers when imported)
+    except ImportError:
+        return
+    for name in ("distributed", "tornado", "bokeh"):
+        for handler in logging.getLogger(name).handlers:
+            handler.setLevel(logging.CRITICAL + 1)
 
 
 @app.command(cls=Command)

@@ -548,3 +548,117 @@ def test_a_case_that_kills_its_worker_is_failed_and_the_others_finish(project, m
     code, err = invoke("sweep", sweep, "--no-plots")
     assert code == 0 and "computed 0, 10 already in the folder" in err
     print(f"10 cases, one killing its worker: {took:.1f} s")
+
+
+def free_port() -> int:
+    import socket
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+class DaskProcesses:
+    """A scheduler and workers of our own on 127.0.0.1, in subprocesses (each in its own
+    process group, logs in files), ended by ``stop``."""
+
+    def __init__(self, folder: Path, env: dict | None = None):
+        self.folder, self.env = folder, {**os.environ, **(env or {})}
+        self.procs: list[subprocess.Popen] = []
+
+    def _start(self, name: str, *args: str) -> subprocess.Popen:
+        log = open(self.folder / f"{name}-{len(self.procs)}.log", "w")
+        p = subprocess.Popen([sys.executable, "-m", "dask", *args], stdout=log, stderr=subprocess.STDOUT,
+                             env=self.env, start_new_session=True)
+        log.close()
+        self.procs.append(p)
+        return p
+
+    def scheduler(self, *tls: str, protocol: str = "tcp") -> tuple[subprocess.Popen, str]:
+        import socket
+
+        port = free_port()
+        p = self._start("scheduler", "scheduler", "--host", "127.0.0.1", "--port", str(port), "--no-dashboard",
+                        *(["--protocol", protocol] if protocol != "tcp" else []), *tls)
+        deadline = time.monotonic() + 20
+        while True:
+            assert p.poll() is None and time.monotonic() < deadline, "the scheduler did not start"
+            try:
+                socket.create_connection(("127.0.0.1", port), timeout=1).close()
+                break
+            except OSError:
+                time.sleep(0.05)
+        return p, f"{protocol}://127.0.0.1:{port}"
+
+    def workers(self, address: str, n: int = 2, *tls: str) -> subprocess.Popen:
+        return self._start("workers", "worker", address, "--nworkers", str(n), "--nthreads", "1",
+                           "--host", "127.0.0.1", "--no-dashboard", *tls)
+
+    def wait_for_workers(self, address: str, n: int = 2, security=None) -> None:
+        from distributed import Client
+
+        with Client(address, timeout=20, security=security, set_as_default=False) as client:
+            client.wait_for_workers(n, timeout=30)
+
+    def kill(self, p: subprocess.Popen) -> None:
+        try:
+            os.killpg(p.pid, signal.SIGKILL)
+        except ProcessLookupError:
+            pass
+        p.wait(10)
+
+    def stop(self) -> None:
+        for p in self.procs:
+            self.kill(p)
+
+
+@pytest.fixture
+def dask_processes(tmp_path):
+    pytest.importorskip("distributed")
+    procs = DaskProcesses(tmp_path, env={"PYTHONPATH": os.pathsep.join([str(Path(__file__).parent), str(ROOT)])})
+    try:
+        yield procs
+    finally:
+        procs.stop()
+
+
+@pytest.mark.slow
+def test_a_lost_scheduler_stops_the_sweep_and_a_new_one_completes_it(project, dask_processes):
+    n = 24
+    sweep = long_sweep(project, n)
+    out = project / "results" / "sweep"
+    scheduler, address = dask_processes.scheduler()
+    dask_processes.workers(address)
+    dask_processes.wait_for_workers(address)
+    env = {**os.environ, "DASK_DISTRIBUTED__COMM__TIMEOUTS__CONNECT": "2s"}
+    proc = subprocess.Popen([sys.executable, "-m", "rbhyst", "sweep", sweep.name, "--no-plots", "--scheduler", address],
+                            cwd=sweep.parent, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+    try:
+        wait_for(proc, out, 3)
+        dask_processes.kill(scheduler)
+        t_lost = time.monotonic()
+        _, err = proc.communicate(timeout=60)
+        took = time.monotonic() - t_lost
+    finally:
+        proc.kill()
+    kept = journal_cases(out)
+    assert proc.returncode == 3, err
+    assert 3 <= kept < n
+    assert err.splitlines()[1:] == [
+        f"error: {n - kept} case{'s' * (n - kept != 1)} could not be computed on {address} (2 worker threads): "
+        f"lost the Dask scheduler (no connection for 2 s); the {kept} finished are kept in "
+        f"{Path('results/sweep') / FOLDER}: the same command with a running scheduler (--scheduler) computes the rest"]
+    assert not (out / "cases.csv").exists()
+    print(f"scheduler lost -> sweep ended in {took:.1f} s")
+    # a new scheduler: the same command completes the sweep, computing only what is missing
+    scheduler, address = dask_processes.scheduler()
+    dask_processes.workers(address)
+    dask_processes.wait_for_workers(address)
+    proc = subprocess.run([sys.executable, "-m", "rbhyst", "sweep", sweep.name, "--no-plots", "--scheduler", address],
+                          cwd=sweep.parent, capture_output=True, text=True, env=env, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    assert f"computed {n - kept} on {address} (2 worker threads), {kept} already in the folder" in proc.stderr
+    assert journal_cases(out) == n  # every case computed once in all
+    code, err = invoke("sweep", sweep, "--no-plots", "--workers", "2", "--out", project / "local")
+    assert code == 0, err
+    assert (out / "cases.csv").read_bytes() == (project / "local" / "cases.csv").read_bytes()

@@ -51,6 +51,56 @@ def killed_result(key: str, message: str) -> dict:
     return {"key": key, "rbhyst_version": __version__, "status": "failed", "message": message}
 
 
+#: the TLS files: the command line's option and the sweep file's key for each
+TLS_FILES = {"ca_file": ("--tls-ca-file", "cluster.tls_ca_file"), "cert": ("--tls-cert", "cluster.tls_cert"),
+             "key": ("--tls-key", "cluster.tls_key")}
+
+
+def cluster_settings(cluster, workers: int | None, scheduler: str | None, tls_ca_file=None, tls_cert=None,
+                     tls_key=None) -> tuple[str | None, dict | None]:
+    """The Dask scheduler a sweep runs on (None: local workers) and its TLS files (None: plain
+    tcp://): the command line's (``--scheduler``, ``--tls-*``, each paths relative to the
+    working folder), else the sweep file's ``[cluster]`` (``cluster``, paths made absolute);
+    ``--workers`` runs locally whatever the file says. Every problem at once (InputError)."""
+    problems = []
+    given = {"ca_file": tls_ca_file, "cert": tls_cert, "key": tls_key}
+    if workers is not None and workers < 1:
+        problems.append(f"--workers: {workers} must be at least 1")
+    if workers is not None and scheduler is not None:
+        problems.append("--workers: not with --scheduler (the cluster's workers run the cases)")
+    address, place = (scheduler, "--scheduler") if scheduler is not None else \
+        (getattr(cluster, "scheduler", None), "cluster.scheduler")
+    if workers is not None or address is None:
+        problems.extend(f"{TLS_FILES[k][0]}: only with --scheduler (a Dask scheduler that wants TLS)"
+                        for k, v in given.items() if v is not None)
+        if problems:
+            raise InputError(problems)
+        return None, None
+    tls: dict[str, Path] = {}
+    names: dict[str, str] = {}
+    for k, (option, key) in TLS_FILES.items():
+        if given[k] is not None:
+            tls[k], names[k] = Path(given[k]).absolute(), option
+        elif getattr(cluster, f"tls_{k}", None) is not None:
+            tls[k], names[k] = Path(getattr(cluster, f"tls_{k}")), key
+    for k, p in tls.items():
+        if not p.is_file():
+            problems.append(f"{names[k]}: {p}: no such file")
+    if tls:
+        side = 0 if any(v is not None for v in given.values()) else 1
+        what = {"ca_file": "the certificate of the CA that signed the scheduler's", "cert": "this client's certificate"}
+        problems.extend(f"{TLS_FILES[k][side]}: missing: TLS needs {what[k]} (and its key, in the certificate's "
+                        "file or apart)" for k in ("ca_file", "cert") if k not in tls)
+        if not address.startswith("tls://"):
+            problems.append(f"{place}: {address}: with TLS certificates the address is tls://host:port")
+    elif address.startswith("tls://"):
+        problems.append(f"{place}: {address}: needs its TLS files: --tls-ca-file, --tls-cert and --tls-key (or "
+                        "tls_ca_file, tls_cert and tls_key in the sweep file's [cluster])")
+    if problems:
+        raise InputError(problems)
+    return address, tls or None
+
+
 def default_workers() -> int:
     try:
         return max(1, len(os.sched_getaffinity(0)))

@@ -23,7 +23,7 @@ from ..deck import ACCEL_UNITS, Deck, load_deck, parse_deck
 from ..errors import InputError
 from .motions import (DECK_MOTION, SIGNAL_KEYS, FileDigests, SweepMotion, absolute_files, deck_support,
                       peak_acceleration, scaled, sweep_motions)
-from .spec import SweepSpec, read_spec
+from .spec import Cluster, SweepSpec, read_spec
 
 
 @dataclass(frozen=True)
@@ -66,6 +66,7 @@ class Sweep:
     motions: list[str]
     vary_keys: list[str]
     cases: list[Case] = field(default_factory=list)
+    cluster: Cluster | None = None  # the sweep file's [cluster], its files' paths absolute
 
     @property
     def stem(self) -> str:
@@ -117,7 +118,8 @@ def load_sweep(path: str | Path) -> Sweep:
         raise InputError(problems)
     combos, vary_keys = _combinations(spec, [m.name for m in motions], levels)
     sweep = Sweep(path=path, spec=spec, deck_path=deck_path, base=base, scale_kind=kind, levels=levels,
-                  motions=[m.name for m in motions], vary_keys=vary_keys)
+                  motions=[m.name for m in motions], vary_keys=vary_keys,
+                  cluster=spec.cluster.resolved(here) if spec.cluster is not None else None)
     sweep.cases = _cases(deck, motions, combos, kind, own, digests)
     return sweep
 

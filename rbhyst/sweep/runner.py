@@ -98,21 +98,22 @@ def check_out(out: Path, names: list[str]) -> None:
 def run_sweep(sweep: Sweep, out: str | Path | None = None, workers: int | None = None,
               scheduler: str | None = None, fresh: bool = False, save_histories: bool = False,
               plots: bool = True, progress: Progress | None = None,
-              started: Callable[["Outcome", int], None] | None = None) -> Outcome:
+              started: Callable[["Outcome", int], None] | None = None, tls_ca_file: str | Path | None = None,
+              tls_cert: str | Path | None = None, tls_key: str | Path | None = None) -> Outcome:
     """Compute what ``out`` (default results/<sweep stem>/ beside the sweep file) does not hold
     yet and write the sweep's files. Raises SweepIncomplete when cases were lost with a worker
     or the cluster (what finished is kept: the same call computes the rest).
 
     ``started(outcome, n)`` is called once the folder is checked and the workers are ready
     to compute ``n`` cases (0: the folder holds them all); ``progress(done, failed, n)`` as
-    batches come back."""
-    from .backends import DaskCluster, LocalPool, default_workers
+    batches come back.
+
+    ``scheduler`` and the ``tls_*`` files (a scheduler that wants TLS) default to the sweep
+    file's ``[cluster]``; ``workers`` runs locally whatever the file says."""
+    from .backends import DaskCluster, LocalPool, cluster_settings, default_workers
 
     out = Path(out) if out is not None else sweep.default_out()
-    if workers is not None and workers < 1:
-        raise InputError(f"--workers: {workers} must be at least 1")
-    if workers is not None and scheduler is not None:
-        raise InputError("--workers: not with --scheduler (the cluster's workers run the cases)")
+    scheduler, tls = cluster_settings(sweep.cluster, workers, scheduler, tls_ca_file, tls_cert, tls_key)
     if save_histories:
         from .histories import require_pyarrow
 
@@ -136,7 +137,7 @@ def run_sweep(sweep: Sweep, out: str | Path | None = None, workers: int | None =
             started(outcome, 0)
         if todo:
             if scheduler is not None:
-                backend = DaskCluster(scheduler, sweep.base, save_histories)
+                backend = DaskCluster(scheduler, sweep.base, save_histories, tls=tls)
             else:
                 backend = LocalPool(min(workers or default_workers(), len(todo)), sweep.base, save_histories)
             outcome.where = backend.where
