@@ -662,3 +662,31 @@ def test_a_lost_scheduler_stops_the_sweep_and_a_new_one_completes_it(project, da
     code, err = invoke("sweep", sweep, "--no-plots", "--workers", "2", "--out", project / "local")
     assert code == 0, err
     assert (out / "cases.csv").read_bytes() == (project / "local" / "cases.csv").read_bytes()
+
+
+@pytest.mark.slow
+def test_on_dask_a_case_that_kills_its_workers_is_failed_and_the_others_finish(project, dask_processes,
+                                                                               monkeypatch):
+    import sweep_faults
+
+    from rbhyst.sweep import backends
+
+    monkeypatch.setattr(backends, "run_batch", sweep_faults.run_batch_or_die)
+    dask_processes.env["DASK_DISTRIBUTED__SCHEDULER__ALLOWED_FAILURES"] = "1"  # a task fails when 2 workers died
+    _, address = dask_processes.scheduler()
+    dask_processes.workers(address)
+    dask_processes.wait_for_workers(address)
+    masses = [700.0 + 10 * k for k in range(7)]
+    masses.insert(2, sweep_faults.KILLER_MASS)
+    sweep = killer_sweep(project, masses)
+    t0 = time.perf_counter()
+    code, err = invoke("sweep", sweep, "--no-plots", "--scheduler", address)
+    took = time.perf_counter() - t0
+    assert code == 0, err
+    out = project / "results" / "sweep"
+    rows = read_cases(out / "cases.csv")
+    assert [r["status"] for r in rows] == ["ok"] * 2 + ["failed"] + ["ok"] * 5
+    assert rows[2]["message"] == "killed its worker 2 times (Dask KilledWorker: out of memory? see the workers' logs)"
+    assert "7 ok, 1 failed; computed 8 on" in err
+    assert journal_cases(out) == 8
+    print(f"8 cases on Dask, one killing its workers: {took:.1f} s")
