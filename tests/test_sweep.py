@@ -690,3 +690,100 @@ def test_on_dask_a_case_that_kills_its_workers_is_failed_and_the_others_finish(p
     assert "7 ok, 1 failed; computed 8 on" in err
     assert journal_cases(out) == 8
     print(f"8 cases on Dask, one killing its workers: {took:.1f} s")
+
+
+def make_certificates(folder: Path) -> dict[str, Path]:
+    """A CA and one certificate it signs for 127.0.0.1 (scheduler, workers and client), by the
+    openssl command."""
+    openssl = shutil.which("openssl")
+    if openssl is None:
+        pytest.skip("no openssl command to make TLS certificates")
+    folder.mkdir(parents=True, exist_ok=True)
+    ext = folder / "leaf.ext"
+    ext.write_text("basicConstraints = CA:FALSE\nkeyUsage = critical, digitalSignature, keyEncipherment\n"
+                   "extendedKeyUsage = serverAuth, clientAuth\nsubjectAltName = IP:127.0.0.1, DNS:localhost\n"
+                   "subjectKeyIdentifier = hash\nauthorityKeyIdentifier = keyid\n")
+
+    def run(*args: str) -> None:
+        subprocess.run([openssl, *args], cwd=folder, check=True, capture_output=True)
+
+    run("req", "-x509", "-newkey", "rsa:2048", "-nodes", "-keyout", "ca.key", "-out", "ca.pem", "-days", "2",
+        "-subj", "/CN=rbhyst test CA", "-addext", "basicConstraints=critical,CA:TRUE",
+        "-addext", "keyUsage=critical,keyCertSign,cRLSign")
+    run("req", "-newkey", "rsa:2048", "-nodes", "-keyout", "node.key", "-out", "node.csr", "-subj", "/CN=127.0.0.1")
+    run("x509", "-req", "-in", "node.csr", "-CA", "ca.pem", "-CAkey", "ca.key", "-CAcreateserial", "-out", "node.pem",
+        "-days", "2", "-extfile", "leaf.ext")
+    return {"ca": folder / "ca.pem", "cert": folder / "node.pem", "key": folder / "node.key"}
+
+
+@pytest.mark.slow
+def test_a_tls_scheduler_from_the_sweep_file_or_the_command_line(project, dask_processes, monkeypatch):
+    from distributed.security import Security
+
+    from rbhyst.sweep.backends import DaskCluster
+
+    certs = make_certificates(project / "certs")
+    stranger = make_certificates(project / "other")  # another CA's
+    tls = ("--tls-ca-file", str(certs["ca"]), "--tls-cert", str(certs["cert"]), "--tls-key", str(certs["key"]))
+    _, address = dask_processes.scheduler(*tls, protocol="tls")
+    port = address.rsplit(":", 1)[1]
+    dask_processes.workers(address, 2, *tls)
+    dask_processes.wait_for_workers(address, security=Security(
+        tls_ca_file=str(certs["ca"]), tls_client_cert=str(certs["cert"]), tls_client_key=str(certs["key"]),
+        require_encryption=True))
+    data = basic(duration=0.5)
+    sweep = write_sweep(project, {**data, "cluster": {"scheduler": address, "tls_ca_file": "certs/ca.pem",
+                                                      "tls_cert": "certs/node.pem", "tls_key": "certs/node.key"}})
+    code, err = invoke("sweep", sweep, "--no-plots")
+    assert code == 0, err
+    assert f"computed 8 on {address} (2 worker threads)" in err
+    # the same on the command line; and locally with --workers, whatever the file says
+    plain = write_sweep(project, data, name="plain")
+    code, err = invoke("sweep", plain, "--no-plots", "--scheduler", address, *tls, "--out", project / "cli")
+    assert code == 0, err
+    code, err = invoke("sweep", sweep, "--no-plots", "--workers", "2", "--out", project / "local")
+    assert code == 0 and "computed 8 on 2 local workers" in err
+    local = (project / "local" / "cases.csv").read_bytes()
+    assert (project / "results" / "sweep" / "cases.csv").read_bytes() == local
+    assert (project / "cli" / "cases.csv").read_bytes() == local
+    # without the certificates, or not over TLS: refused, one line
+    monkeypatch.setattr(DaskCluster, "LOST_AFTER_S", 3.0)
+    for args, line in [
+        (("--scheduler", address), f"--scheduler: {address}: needs its TLS files: --tls-ca-file, --tls-cert and "
+                                   "--tls-key (or tls_ca_file, tls_cert and tls_key in the sweep file's [cluster])"),
+        (("--scheduler", f"tcp://127.0.0.1:{port}"), f"--scheduler: cannot reach tcp://127.0.0.1:{port} ("),
+        (("--scheduler", address, "--tls-ca-file", str(stranger["ca"]), "--tls-cert", str(stranger["cert"]),
+          "--tls-key", str(stranger["key"])), f"--scheduler: cannot reach {address} ("),
+    ]:
+        t0 = time.perf_counter()
+        code, err = invoke("sweep", plain, "--no-plots", *args, "--out", project / "refused")
+        assert code == 2 and len(err.splitlines()) == 1 and err.startswith(f"error: {line}"), err
+        print(f"{args[1]}: {err.strip()} ({time.perf_counter() - t0:.1f} s)")
+    assert not (project / "refused" / "cases.csv").exists()
+
+
+@pytest.mark.parametrize("cluster, args, lines", [
+    (None, ("--tls-cert", "{folder}/seed_wri.toml"), ["--tls-cert: only with --scheduler (a Dask scheduler that wants TLS)"]),
+    (None, ("--scheduler", "tcp://127.0.0.1:1", "--tls-ca-file", "{folder}/seed_wri.toml", "--tls-cert",
+            "{folder}/nope.pem"),
+     ["--tls-cert: {folder}/nope.pem: no such file",
+      "--scheduler: tcp://127.0.0.1:1: with TLS certificates the address is tls://host:port"]),
+    ({"scheduler": "tls://127.0.0.1:1", "tls_cert": "seed_wri.toml"}, (),
+     ["cluster.tls_ca_file: missing: TLS needs the certificate of the CA that signed the scheduler's"]),
+    ({"scheduler": "tls://127.0.0.1:1", "tls_ca_file": "certs/ca.pem", "tls_cert": "seed_wri.toml"},
+     ("--tls-key", "{folder}/notes.txt"), ["cluster.tls_ca_file: {folder}/certs/ca.pem: no such file"]),
+    ({"scheduler": "tls://127.0.0.1:1", "tls_certificate": "ca.pem"}, (), ["cluster.tls_certificate: unknown key"]),
+    ({"scheduler": "tls://127.0.0.1:1"}, ("--workers", "2", "--tls-key", "{folder}/notes.txt"),
+     ["--tls-key: only with --scheduler (a Dask scheduler that wants TLS)"]),
+    ({"scheduler": ""}, (), ["cluster.scheduler: String should have at least 1 character"]),
+])
+def test_cluster_mistakes_are_one_line_each_and_nothing_is_written(project, cluster, args, lines):
+    data = basic(duration=0.5)
+    if cluster is not None:
+        data["cluster"] = cluster
+    sweep = write_sweep(project, data)
+    before = snapshot(project)
+    code, err = invoke("sweep", sweep, *[a.format(folder=project) for a in args])
+    assert code == 2
+    assert err.splitlines() == [f"error: {x.format(folder=project)}" for x in lines]
+    assert snapshot(project) == before

@@ -88,9 +88,10 @@ def cluster_settings(cluster, workers: int | None, scheduler: str | None, tls_ca
             problems.append(f"{names[k]}: {p}: no such file")
     if tls:
         side = 0 if any(v is not None for v in given.values()) else 1
-        what = {"ca_file": "the certificate of the CA that signed the scheduler's", "cert": "this client's certificate"}
-        problems.extend(f"{TLS_FILES[k][side]}: missing: TLS needs {what[k]} (and its key, in the certificate's "
-                        "file or apart)" for k in ("ca_file", "cert") if k not in tls)
+        what = {"ca_file": "the certificate of the CA that signed the scheduler's",
+                "cert": "this client's certificate, signed by that CA"}
+        problems.extend(f"{TLS_FILES[k][side]}: missing: TLS needs {what[k]}" for k in ("ca_file", "cert")
+                        if k not in tls)
         if not address.startswith("tls://"):
             problems.append(f"{place}: {address}: with TLS certificates the address is tls://host:port")
     elif address.startswith("tls://"):
