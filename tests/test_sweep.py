@@ -787,3 +787,33 @@ def test_cluster_mistakes_are_one_line_each_and_nothing_is_written(project, clus
     assert code == 2
     assert err.splitlines() == [f"error: {x.format(folder=project)}" for x in lines]
     assert snapshot(project) == before
+
+
+def test_a_sweep_writes_only_into_its_output_folder(project):
+    """Paths in a deck or a sweep file are read, never written to: a deck's output.directory
+    (relative, absolute, its own folder), set in the deck or varied by the sweep, is left out
+    of a sweep: everything goes into the sweep's output folder."""
+    root = project.parent
+    decks = root / "decks"
+    decks.mkdir()
+    data = _toml(project / "seed_wri.toml")
+    data["output"] = {**data.get("output", {}), "directory": "."}
+    for c in ("x1", "x2"):
+        f = data["excitation"]["support"][c].get("file")
+        if f:
+            data["excitation"]["support"][c]["file"] = str(project / f)
+    (decks / "deck.toml").write_text(tomli_w.dumps(data))
+    sweep = write_sweep(project, {"deck": "../decks/deck.toml", "motions": [{"name": "syn", **SYN}],
+                                  "vary": {"output.directory": ["../elsewhere", str(root / "absolute"), "/", "."],
+                                           "analysis.duration": [0.5]}})
+    before = snapshot(root)
+    args = ("--save-histories",) if __import__("importlib").util.find_spec("pyarrow") else ()
+    code, err = invoke("sweep", sweep, *args)
+    assert code == 0, err
+    after = snapshot(root)
+    changed = {k for k in after if before.get(k) != after[k]} | (set(before) - set(after))
+    assert changed and all(k.startswith("study/results/sweep/") for k in changed), changed
+    assert not (root / "elsewhere").exists() and not (root / "absolute").exists()
+    rows = read_cases(project / "results" / "sweep" / "cases.csv")
+    assert [r["output.directory"] for r in rows] == ["../elsewhere", str(root / "absolute"), "/", "."]
+    assert len({r["peak_u1_m"] for r in rows}) == 1  # one computation: output.directory is not in the key
