@@ -505,8 +505,8 @@ def test_dask_cluster_gives_the_local_results(project):
     distributed = pytest.importorskip("distributed")
     sweep = write_sweep(project, basic(duration=1.0))
     assert invoke("sweep", sweep, "--no-plots", "--workers", "2", "--out", project / "local")[0] == 0
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) \
-            as cluster:
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
+                                  dashboard_address=None) as cluster:
         code, err = invoke("sweep", sweep, "--no-plots", "--scheduler", cluster.scheduler_address,
                            "--out", project / "dask")
     assert code == 0, err
