@@ -817,3 +817,29 @@ def test_a_sweep_writes_only_into_its_output_folder(project):
     rows = read_cases(project / "results" / "sweep" / "cases.csv")
     assert [r["output.directory"] for r in rows] == ["../elsewhere", str(root / "absolute"), "/", "."]
     assert len({r["peak_u1_m"] for r in rows}) == 1  # one computation: output.directory is not in the key
+
+
+@pytest.mark.slow
+def test_a_second_sweep_into_the_same_folder_is_refused_and_kill_9_leaves_no_lock(project):
+    import psutil
+
+    sweep = long_sweep(project, 16)
+    out = project / "results" / "sweep"
+    proc = start(sweep)
+    try:
+        wait_for(proc, out, 2)
+        code, err = invoke("sweep", sweep, "--workers", "1", "--no-plots")
+        assert code == 2
+        assert err.splitlines() == [f"error: {out}: another rbhyst sweep is writing into this folder"]
+        workers = workers_of(proc)
+        proc.kill()  # SIGKILL: no cleanup of its own
+        proc.communicate(timeout=30)
+    finally:
+        proc.kill()
+    _, alive = psutil.wait_procs(workers, timeout=10)
+    assert not alive  # its workers end with it
+    kept = journal_cases(out)
+    proc = start(sweep)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 0, err
+    assert f"computed {16 - kept} on 2 local workers, {kept} already in the folder" in err
