@@ -131,14 +131,20 @@ def run_sweep(sweep: Sweep, out: str | Path | None = None, workers: int | None =
         else:
             todo[c.key] = c.values
     outcome.reused = sum(1 for c in sweep.cases if c.key in outcome.results)
+    # a scheduler that cannot be reached (or refuses the certificates) is an input error: before
+    # the journal is made, so that nothing is written
+    backend = DaskCluster(scheduler, sweep.base, save_histories, tls=tls) if todo and scheduler is not None else None
     try:
-        journal.open()
+        try:
+            journal.open()
+        except BaseException:
+            if backend is not None:
+                backend.close()
+            raise
         if not todo and started:
             started(outcome, 0)
         if todo:
-            if scheduler is not None:
-                backend = DaskCluster(scheduler, sweep.base, save_histories, tls=tls)
-            else:
+            if backend is None:
                 backend = LocalPool(min(workers or default_workers(), len(todo)), sweep.base, save_histories)
             outcome.where = backend.where
             if started:
