@@ -624,8 +624,9 @@ def dask_processes(tmp_path):
 
 @pytest.mark.slow
 def test_a_lost_scheduler_stops_the_sweep_and_a_new_one_completes_it(project, dask_processes):
-    n = 24
-    sweep = long_sweep(project, n)
+    n = 12
+    sweep = write_sweep(project, {"deck": "seed_wri.toml",  # 20 s of the seed's record: a second a case
+                                  "vary": {"body.mass": [800.0 + k for k in range(n)], "analysis.duration": [20.0]}})
     out = project / "results" / "sweep"
     scheduler, address = dask_processes.scheduler()
     dask_processes.workers(address)
