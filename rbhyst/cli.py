@@ -358,7 +358,7 @@ def sweep(
     workers: Annotated[Optional[int], typer.Option(
         "--workers", help="Local worker processes (default: the cores).")] = None,
     scheduler: Annotated[Optional[str], typer.Option(
-        "--scheduler", help="Run on this Dask scheduler instead, e.g. tcp://host:8786.")] = None,
+        "--scheduler", help="Run on this Dask scheduler instead, e.g. tcp://host:8786 (tls:// with --tls-*).")] = None,
     out: Annotated[Optional[Path], typer.Option(
         "--out", help="Output folder (default: results/<sweep stem>/ beside the sweep file).")] = None,
     fresh: Annotated[bool, typer.Option("--fresh", help="Start over: forget the cases the folder holds.")] = False,

@@ -574,10 +574,10 @@ class DaskProcesses:
         self.procs.append(p)
         return p
 
-    def scheduler(self, *tls: str, protocol: str = "tcp") -> tuple[subprocess.Popen, str]:
+    def scheduler(self, *tls: str, protocol: str = "tcp", port: int | None = None) -> tuple[subprocess.Popen, str]:
         import socket
 
-        port = free_port()
+        port = port or free_port()
         p = self._start("scheduler", "scheduler", "--host", "127.0.0.1", "--port", str(port), "--no-dashboard",
                         *(["--protocol", protocol] if protocol != "tcp" else []), *tls)
         deadline = time.monotonic() + 20
@@ -844,3 +844,33 @@ def test_a_second_sweep_into_the_same_folder_is_refused_and_kill_9_leaves_no_loc
     _, err = proc.communicate(timeout=120)
     assert proc.returncode == 0, err
     assert f"computed {16 - kept} on 2 local workers, {kept} already in the folder" in err
+
+
+@pytest.mark.slow
+def test_a_scheduler_back_within_the_timeout_costs_only_the_batches_in_flight(project, dask_processes):
+    n = 12
+    sweep = write_sweep(project, {"deck": "seed_wri.toml",
+                                  "vary": {"body.mass": [800.0 + k for k in range(n)], "analysis.duration": [20.0]}})
+    out = project / "results" / "sweep"
+    scheduler, address = dask_processes.scheduler()
+    dask_processes.workers(address)
+    dask_processes.wait_for_workers(address)
+    env = {**os.environ, "DASK_DISTRIBUTED__COMM__TIMEOUTS__CONNECT": "20s"}
+    proc = subprocess.Popen([sys.executable, "-m", "rbhyst", "sweep", sweep.name, "--no-plots", "--scheduler", address],
+                            cwd=sweep.parent, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+    try:
+        wait_for(proc, out, 3)
+        dask_processes.kill(scheduler)
+        kept = journal_cases(out)
+        time.sleep(1.0)
+        _, again = dask_processes.scheduler(port=int(address.rsplit(":", 1)[1]))
+        assert again == address
+        dask_processes.workers(address)
+        _, err = proc.communicate(timeout=90)
+    finally:
+        proc.kill()
+    assert proc.returncode == 0, err
+    assert kept < n
+    said = err.splitlines()
+    assert len(said) == 3 and said[1].startswith(f"{n} ok, 0 failed; computed {n} on {address}"), err
+    assert journal_cases(out) == n
