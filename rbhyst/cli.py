@@ -363,13 +363,19 @@ def sweep(
     workers: Annotated[Optional[int], typer.Option(
         "--workers", help="Local worker processes (default: the cores).")] = None,
     scheduler: Annotated[Optional[str], typer.Option(
-        "--scheduler", help="Run on this Dask scheduler instead, e.g. tcp://host:8786.")] = None,
+        "--scheduler", help="Run on this Dask scheduler instead, e.g. tcp://host:8786 (tls:// with --tls-*).")] = None,
     out: Annotated[Optional[Path], typer.Option(
         "--out", help="Output folder (default: results/<sweep stem>/ beside the sweep file).")] = None,
     fresh: Annotated[bool, typer.Option("--fresh", help="Start over: forget the cases the folder holds.")] = False,
     save_histories: Annotated[bool, typer.Option(
         "--save-histories", help="Every case's time history into histories.parquet (needs pyarrow).")] = False,
     plots: Annotated[bool, typer.Option("--plots/--no-plots", help="Write PNG plots.")] = True,
+    tls_ca_file: Annotated[Optional[Path], typer.Option(
+        "--tls-ca-file", help="With a tls:// --scheduler: the CA certificate (PEM) the scheduler's is signed by.")] = None,
+    tls_cert: Annotated[Optional[Path], typer.Option(
+        "--tls-cert", help="With a tls:// --scheduler: this client's certificate (PEM).")] = None,
+    tls_key: Annotated[Optional[Path], typer.Option(
+        "--tls-key", help="With a tls:// --scheduler: this client's private key (PEM), if not in --tls-cert.")] = None,
 ):
     """One deck over motions x scale x deck values: cases.csv, stats.csv, sweep.json, plots.
 
@@ -390,8 +396,11 @@ def sweep(
         from rbhyst.solve.kernels.compiled import ahead_of_time
         from rbhyst.solve.kernels.loop import run_chunk
 
+        on_dask = scheduler is not None or (workers is None and getattr(sw.cluster, "scheduler", None) is not None)
+        if on_dask:
+            _quiet_dask()
         # built at install, the kernels need no compiling (and numba's cache stays empty)
-        if scheduler is None and not ahead_of_time() and not kernels.cached([run_chunk]):
+        if not on_dask and not ahead_of_time() and not kernels.cached([run_chunk]):
             say("note: compiling the numba kernels, once (a minute at most); the workers load them from the cache")
             from rbhyst.api import run as _run
 
@@ -426,7 +435,7 @@ def sweep(
             try:
                 outcome = run_sweep(sw, out=target, workers=workers, scheduler=scheduler, fresh=fresh,
                                     save_histories=save_histories, plots=plots, progress=progress,
-                                    started=started)
+                                    started=started, tls_ca_file=tls_ca_file, tls_cert=tls_cert, tls_key=tls_key)
             except SweepIncomplete as err:
                 say(f"error: {err}")
                 raise typer.Exit(EXIT_ANALYSIS) from None
@@ -451,6 +460,26 @@ def sweep(
         if len(bad) > 5:
             say(f"warning: ... and {len(bad) - 5} more failed cases: see cases.csv (status, message)")
     say(f"wrote {target}")
+    if outcome.killed:
+        n = len(outcome.killed)
+        say(f"error: the sweep is incomplete: case{'s' * (n != 1)} {', '.join(map(str, outcome.killed))} killed "
+            f"{'their' if n != 1 else 'its'} worker process every time (failed in cases.csv, not kept): the same "
+            "command tries them again, with more memory per worker if that was the cause")
+        raise typer.Exit(EXIT_ANALYSIS)
+
+
+def _quiet_dask() -> None:
+    """Dask's own log lines off the console: the command says in its own lines what went wrong
+    (the workers keep their logs)."""
+    import logging
+
+    try:
+        import distributed  # noqa: F401  (it sets up its loggers when imported)
+    except ImportError:
+        return
+    for name in ("distributed", "tornado", "bokeh"):
+        for handler in logging.getLogger(name).handlers:
+            handler.setLevel(logging.CRITICAL + 1)
 
 
 @app.command(cls=Command)

@@ -21,8 +21,9 @@ from typing import Any
 from rbhyst._version import __version__
 from rbhyst.model.deck import ACCEL_UNITS, Deck, load_deck, parse_deck
 from rbhyst.errors import InputError
-from rbhyst.analyses.sweep.motions import (DECK_MOTION, SIGNAL_KEYS, FileDigests, SweepMotion, absolute_files, deck_support, peak_acceleration, scaled, sweep_motions)
-from rbhyst.analyses.sweep.spec import SweepSpec, read_spec
+from rbhyst.analyses.sweep.motions import (DECK_MOTION, SIGNAL_KEYS, FileDigests, SweepMotion, absolute_files,
+                                           deck_support, peak_acceleration, scaled, sweep_motions)
+from rbhyst.analyses.sweep.spec import Cluster, SweepSpec, read_spec
 
 
 @dataclass(frozen=True)
@@ -65,6 +66,7 @@ class Sweep:
     motions: list[str]
     vary_keys: list[str]
     cases: list[Case] = field(default_factory=list)
+    cluster: Cluster | None = None  # the sweep file's [cluster], its files' paths absolute
 
     @property
     def stem(self) -> str:
@@ -116,7 +118,8 @@ def load_sweep(path: str | Path) -> Sweep:
         raise InputError(problems)
     combos, vary_keys = _combinations(spec, [m.name for m in motions], levels)
     sweep = Sweep(path=path, spec=spec, deck_path=deck_path, base=base, scale_kind=kind, levels=levels,
-                  motions=[m.name for m in motions], vary_keys=vary_keys)
+                  motions=[m.name for m in motions], vary_keys=vary_keys,
+                  cluster=spec.cluster.resolved(here) if spec.cluster is not None else None)
     sweep.cases = _cases(deck, motions, combos, kind, own, digests)
     return sweep
 
