@@ -243,6 +243,39 @@ class Pulse(_Model, Generic[U]):
     start: Annotated[float, Field(ge=0)] = 0.0
 
 
+PSD_UNITS = Literal["g2/Hz", "(m/s2)2/Hz"]
+
+
+class Random(_Model):
+    """A stationary Gaussian support acceleration with a power spectral density: breakpoints
+    [[frequency_hz, value], ...] (log-log between them, as MIL-STD-810 tables give them) or a CSV
+    file of them; ``duration`` s long, the same history for the same ``seed`` (see
+    rbhyst.analyses.qualification.psd). ``dt``: its sample step (default a tenth of the period
+    of the PSD's highest frequency); ``scale`` multiplies the history (the PSD by its square)."""
+
+    type: Literal["random"]
+    psd: str | list[list[float]]
+    units: PSD_UNITS
+    duration: PosFloat
+    seed: Annotated[int, Field(ge=0)]
+    dt: PosFloat | None = None
+    scale: float = 1.0
+
+    @field_validator("psd", mode="before")
+    @classmethod
+    def _breakpoints(cls, v):
+        if isinstance(v, list):
+            from .analyses.qualification.psd import psd_problems
+
+            problems = psd_problems(v)
+            if problems and problems[0][0] is None:
+                raise ValueError(problems[0][1])
+            if problems:
+                raise _key_problems(problems)
+            return [[float(x) for x in p] for p in v]
+        return v
+
+
 def _signal_kind(v: Any) -> str:
     kind = v.get("type", "record") if isinstance(v, dict) else getattr(v, "type", "record")
     return "pulse" if kind in PULSES else kind
@@ -256,9 +289,18 @@ def _signal(units):
     ]
 
 
+def _support_signal():
+    """What a support acceleration may be: a signal of _signal, or random vibration."""
+    return Annotated[
+        Union[Annotated[Record[AccelUnits], Tag("record")], Annotated[Sine[AccelUnits], Tag("sine")],
+              Annotated[Pulse[AccelUnits], Tag("pulse")], Annotated[Random, Tag("random")]],
+        Discriminator(_signal_kind),
+    ]
+
+
 class Support(_Model):
-    x1: _signal(AccelUnits) | None = None
-    x2: _signal(AccelUnits) | None = None
+    x1: _support_signal() | None = None
+    x2: _support_signal() | None = None
 
 
 class Force(_Model):
@@ -585,7 +627,7 @@ def _format_loc(loc: tuple) -> str:
     for part in loc:
         if isinstance(part, int):
             out += f"[{part + 1}]"
-        elif part in ("record", "sine", "pulse") or str(part).startswith(("Record[", "Sine[", "Pulse[")):
+        elif part in ("record", "sine", "pulse", "random") or str(part).startswith(("Record[", "Sine[", "Pulse[")):
             continue  # the union's tag is noise to a user
         elif re.fullmatch(r"[A-Za-z0-9_\-]+", str(part)):
             out += ("." if out else "") + str(part)
@@ -608,8 +650,12 @@ def _messages(err: ValidationError) -> list[str]:
             lines += [f"{_format_loc((*e['loc'], key))}: {m}" for key, m in e["ctx"]["problems"]]
             continue
         elif e["type"] == "union_tag_invalid":
-            msg = (f"unknown type {e['ctx']['tag']!r}: use type = \"sine\" or a pulse "
+            support = "support" in e["loc"]
+            random = ", \"random\"" if support else ""
+            msg = (f"unknown type {e['ctx']['tag']!r}: use type = \"sine\"{random} or a pulse "
                    f"({', '.join(repr(p) for p in PULSES)}), or give `file` (and no type) for a record")
+            if e["ctx"]["tag"] == "random" and not support:
+                msg = "type \"random\" is random vibration of the support: excitation.support.x1 or x2 only"
         lines.append(f"{_format_loc(e['loc'])}: {msg}")
     return list(dict.fromkeys(lines))
 

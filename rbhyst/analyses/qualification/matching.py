@@ -40,6 +40,8 @@ from .rrs import AC156_DURATION, AC156_STRONG, G, RRS, sixth_octave
 AIM = math.sqrt(0.9 * 1.3)
 #: ... tending to this multiple at the top of the checked range (see match)
 TOP_AIM = 1.0
+#: the peaks are never cut below this multiple of the RRS at the top of the range
+PEAK_FLOOR = 0.95
 #: iterations before the motion is declared not matched
 MAX_ITERATIONS = 40
 #: the loop stops once the TRS is this far inside the band, so that the file's rounding and the
@@ -324,7 +326,8 @@ def match(rrs: RRS, duration: float, dt: float, strong: float, rng) -> tuple[np.
     is_check = np.isin(control, checks)
     top_check = np.flatnonzero(is_check)[-1]
     lf = np.log(np.maximum(f, 1e-6))
-    amp = rrs(np.maximum(f, 1e-6)) * _taper(f, lo / 2.0, min(top * 1.2, 0.8 * 0.5 / dt))
+    band = _taper(f, lo / 2.0, min(top * 1.2, 0.8 * 0.5 / dt))
+    amp = rrs(np.maximum(f, 1e-6)) * band
     acc = to_rest(env * np.fft.irfft(np.fft.rfft(rng.standard_normal(m)) * amp, m)[:n], dt, env)
     lo_ok, hi_ok = rrs.band[0] + MARGIN, rrs.band[1] - 3 * MARGIN
     best, best_err, best_it = None, math.inf, 0
@@ -338,13 +341,15 @@ def match(rrs: RRS, duration: float, dt: float, strong: float, rng) -> tuple[np.
         if err <= 0.0 or it == MAX_ITERATIONS:
             break
         # Fourier amplitudes times aim / TRS, interpolated on log frequency (flat beyond the
-        # control frequencies), at most doubled or halved at once
+        # control frequencies), at most doubled or halved at once, and band-limited again (the
+        # end-at-rest correction and the cut peaks below leave content outside the band)
         correction = np.exp(np.interp(lf, np.log(control), np.log(aim / sa)))
-        acc = np.fft.irfft(np.fft.rfft(acc, m) * np.clip(correction, 0.5, 2.0), m)[:n]
+        acc = np.fft.irfft(np.fft.rfft(acc, m) * np.clip(correction, 0.5, 2.0) * band, m)[:n]
         if ratio[top_check] > hi_ok:
             # where the TRS at the top, the peak acceleration, is too high, the peaks are cut
-            # to what it should be (the next corrections restore the spectrum around them)
-            limit = np.max(np.abs(acc)) * TOP_AIM / ratio[top_check]
+            # to what it should be (the next corrections restore the spectrum around them), but
+            # never below the RRS there: a rigid oscillator sees the peak acceleration itself
+            limit = max(np.max(np.abs(acc)) * TOP_AIM / ratio[top_check], PEAK_FLOOR * rrs(hi))
             acc = np.clip(acc, -limit * env, limit * env)
         acc = to_rest(acc, dt, env)
     return best, best_it
