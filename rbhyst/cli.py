@@ -605,6 +605,71 @@ def make_record(
 RECORD_MARK = "# rbhyst make-record"
 
 
+@app.command("make-motion", cls=Command)
+def make_motion(
+    out: Annotated[Path, typer.Argument(help="Folder to write: m1_x1.csv, m1_x2.csv, ..., trs.csv, trs.png, "
+                                             "motions.json.")],
+    rrs: Annotated[Optional[str], typer.Option(help="ac156, or a CSV RRS for x1 (frequency_hz and a value column "
+                                                    "with its unit: sa_g, sa_m_s2).")] = None,
+    rrs_x2: Annotated[Optional[str], typer.Option("--rrs-x2", help="A CSV RRS for x2 (vertical), with an RRS "
+                                                                   "file for x1.")] = None,
+    rrs_damping: Annotated[Optional[float], typer.Option(help="The damping ratio the RRS files are drawn for.")] = None,
+    sds: Annotated[Optional[float], typer.Option(help="AC156: S_DS [g].")] = None,
+    z_over_h: Annotated[Optional[float], typer.Option(help="AC156: z/h, 0 at grade to 1 at the roof.")] = None,
+    duration: Annotated[float, typer.Option(help="Length [s] (AC156: 30 s, 20 s of them strong motion).")] = 30.0,
+    dt: Annotated[float, typer.Option(help="Sampling step [s].")] = 0.005,
+    seed: Annotated[int, typer.Option(help="Random seed: the same seed gives the same motions.")] = 1,
+    motions: Annotated[int, typer.Option(min=1, help="Number of motions (each with its own noise).")] = 1,
+    plots: Annotated[bool, typer.Option("--plots/--no-plots", help="Write trs.png.")] = True,
+):
+    """Spectrum-compatible support motions: one record per axis whose TRS lies within 0.9-1.3 of the RRS.
+
+    The records are read by decks and by `rbhyst spectrum` (--units g); exit 3 when a motion
+    cannot be matched, with what would work.
+    """
+    import json
+    import shlex
+
+    from .analyses.qualification import matching
+    from .analyses.qualification.rrs import requested_rrs
+    from .outdir import staged_directory
+
+    keys = {"rrs": "--rrs", "rrs_x2": "--rrs-x2", "damping": "--rrs-damping", "sds": "--sds", "z_over_h": "--z-over-h",
+            "duration": "--duration", "dt": "--dt"}
+    with user_errors():
+        spectra, standard = requested_rrs(rrs, rrs_x2, rrs_damping, sds, z_over_h, Path.cwd(), keys)
+        problems = matching.motion_problems(spectra, duration, dt, None, standard, keys)
+        if problems:
+            raise InputError(problems)
+        made = matching.make_motions(spectra, motions, duration, dt, seed)
+        options = {"--rrs": rrs, "--rrs-x2": rrs_x2, "--rrs-damping": rrs_damping, "--sds": sds,
+                   "--z-over-h": z_over_h, "--duration": duration, "--dt": dt, "--seed": seed}
+        mark = f"{MOTION_MARK} " + " ".join(f"{k} {shlex.quote(str(v))}" for k, v in options.items() if v is not None)
+        with staged_directory(out) as tmp:
+            for m in made:
+                for axis in m.records:
+                    (tmp / matching.record_name(m, axis)).write_text(matching.record_text(m, axis, mark),
+                                                                    encoding="utf-8")
+            (tmp / "trs.csv").write_text("\n".join(matching.trs_rows(made)) + "\n", encoding="utf-8")
+            (tmp / "motions.json").write_text(json.dumps(matching.motions_summary(made, spectra, standard), indent=2)
+                                              + "\n", encoding="utf-8")
+            if plots:
+                from .report.qualification import plot_trs
+
+                plot_trs(made, spectra, tmp / "trs.png")
+    for m in made:
+        for axis, r in m.records.items():
+            say(f"motion {m.number} {axis}: TRS from {r.check.said()} at {len(r.check.frequency_hz)} frequencies "
+                f"({r.iterations} iterations); peak {float(abs(r.acc_g).max()):.3g} g")
+        if m.correlation is not None:
+            say(f"motion {m.number}: correlation of x1 and x2 {m.correlation:+.3f}")
+    say(f"wrote {out}")
+
+
+#: the first line of every record make-motion writes
+MOTION_MARK = "# rbhyst make-motion"
+
+
 def output_dir(deck, deck_path: Path) -> Path:
     """output.directory relative to the deck's folder, default results/<deck stem>/."""
     if deck.output.directory is not None:

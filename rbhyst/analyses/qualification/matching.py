@@ -311,6 +311,9 @@ def match(rrs: RRS, duration: float, dt: float, strong: float, rng) -> tuple[np.
     n = int(round(duration / dt)) + 1
     t = dt * np.arange(n)
     env = envelope(t, duration, strong)
+    # the filtering below smears a little of the record onto its first and last samples: a
+    # half-second taper (where the envelope is below 3 %) brings them back to exactly zero
+    edges = envelope(t, duration, duration - 2.0 * min(0.5, 0.5 * (duration - strong)))
     lo, hi = rrs.check_range
     # zero padding: the corrections act as filters a few periods of the lowest frequency long,
     # whose tails must not wrap around onto the record's other end
@@ -351,5 +354,60 @@ def match(rrs: RRS, duration: float, dt: float, strong: float, rng) -> tuple[np.
             # never below the RRS there: a rigid oscillator sees the peak acceleration itself
             limit = max(np.max(np.abs(acc)) * TOP_AIM / ratio[top_check], PEAK_FLOOR * rrs(hi))
             acc = np.clip(acc, -limit * env, limit * env)
-        acc = to_rest(acc, dt, env)
+        acc = to_rest(acc * edges, dt, env)
     return best, best_it
+
+
+# ---------------------------------------------------------------- files
+
+#: trs.csv's columns, one row per motion, axis and checked frequency
+TRS_COLUMNS = ("motion", "axis", "frequency_hz", "rrs_g", "trs_g", "ratio", "lower_g", "upper_g", "within")
+
+
+def record_text(motion: Motion, axis: str, mark: str) -> str:
+    """A record file as make-record writes one: its mark line, ``time_s,acceleration_g``, rows."""
+    import io
+
+    what = {"x1": "horizontal", "x2": "vertical"}[axis]
+    buf = io.StringIO()
+    np.savetxt(buf, np.column_stack([motion.time, motion.records[axis].acc_g]), delimiter=",", comments="",
+               fmt="%.6f," + FILE_FORMAT,
+               header=f"{mark}: motion {motion.number}, {axis} ({what})\ntime_s,acceleration_g")
+    return buf.getvalue()
+
+
+def record_name(motion: Motion, axis: str) -> str:
+    return f"m{motion.number}_{axis}.csv"
+
+
+def trs_rows(motions: list[Motion]) -> list[str]:
+    lines = [",".join(TRS_COLUMNS)]
+    for m in motions:
+        for axis, r in m.records.items():
+            c = r.check
+            lo, hi = c.band
+            for f, a, b, ok in zip(c.frequency_hz, c.rrs / G, c.trs / G, c.within):
+                lines.append(f"{m.number},{axis},{f:.6g},{a:.6g},{b:.6g},{b / a:.6g},{lo * a:.6g},{hi * a:.6g},"
+                             f"{'yes' if ok else 'no'}")
+    return lines
+
+
+def motions_summary(motions: list[Motion], rrs: dict[str, RRS], standard: str | None) -> dict:
+    """motions.json: the method, the RRS and, per motion and axis, what the record is."""
+    from ... import __version__
+
+    return {
+        "rbhyst_version": __version__,
+        "method": "envelope-shaped band-limited Gaussian noise (PCG64), Fourier amplitudes iterated by "
+                  "aim / TRS at 1/12-octave control frequencies until the TRS lies within the band at every "
+                  "1/6-octave check frequency; corrected to end at rest (final velocity and displacement zero "
+                  "for the record linear between its samples)",
+        "aim": {"ratio": AIM, "at_top_of_range": TOP_AIM},
+        "standard": standard,
+        "rrs": {axis: r.describe() for axis, r in rrs.items()},
+        "motions": [{"number": m.number, "seed": m.seed, "dt_s": m.dt, "duration_s": m.duration,
+                     "strong_motion_s": m.strong, "correlation_x1_x2": m.correlation,
+                     "files": {axis: record_name(m, axis) for axis in m.records},
+                     "axes": {axis: r.facts(m.dt, m.strong) for axis, r in m.records.items()}}
+                    for m in motions],
+    }

@@ -211,3 +211,33 @@ def read_rrs(path: Path, damping: float | None, name: str = "", damping_key: str
         raise InputError(problems)
     return RRS(name or path.stem, float(damping), curve.x, curve.y * ACCEL_TO_SI[unit.name],
                (float(curve.x[0]), float(curve.x[-1])), AC156_BAND, str(path.name))
+
+
+def requested_rrs(rrs: str | None, rrs_x2: str | None, damping: float | None, sds: float | None,
+                  z_over_h: float | None, base: Path, keys: dict[str, str]) -> tuple[dict[str, RRS], str | None]:
+    """The RRS per axis a command asks for, and the standard's name (None for files): ``rrs`` a
+    standard's name or the x1 (horizontal) RRS file, ``rrs_x2`` the vertical one's file.
+    ``keys`` names the options (or deck keys) in messages: rrs, rrs_x2, damping, sds, z_over_h."""
+    if rrs is None:
+        raise InputError(f"{keys['rrs']}: required: {', '.join(STANDARDS)} or an RRS file (frequency_hz,sa_g)")
+    if rrs.lower() in STANDARDS:
+        problems = ac156_problems(sds, z_over_h, keys["sds"], keys["z_over_h"])
+        problems += [f"{keys[k]}: not with {keys['rrs']} {rrs}: the standard gives it" for k, v in
+                     (("rrs_x2", rrs_x2), ("damping", damping)) if v is not None]
+        if problems:
+            raise InputError(problems)
+        return ac156(sds, z_over_h), rrs.lower()
+    problems = [f"{keys[k]}: only with {keys['rrs']} {', '.join(STANDARDS)}" for k, v in
+                (("sds", sds), ("z_over_h", z_over_h)) if v is not None]
+    out = {}
+    for axis, name in (("x1", rrs), ("x2", rrs_x2)):
+        if name is None:
+            continue
+        path = Path(name) if Path(name).is_absolute() else base / name
+        try:
+            out[axis] = read_rrs(path, damping, f"{Path(name).stem} ({axis})", keys["damping"])
+        except InputError as err:
+            problems += [p for p in err.problems if p not in problems]
+    if problems:
+        raise InputError(problems)
+    return out, None
