@@ -670,6 +670,57 @@ def make_motion(
 MOTION_MARK = "# rbhyst make-motion"
 
 
+@app.command(cls=Command)
+def qualify(
+    deck: Annotated[Path, typer.Argument(help="TOML or YAML deck (x1 horizontal, x2 vertical), with [qualify] or "
+                                              "the options below.")],
+    standard: Annotated[Optional[str], typer.Option(help="The required response spectrum: ac156.")] = None,
+    sds: Annotated[Optional[float], typer.Option(help="AC156: S_DS [g].")] = None,
+    z_over_h: Annotated[Optional[float], typer.Option(help="AC156: z/h, 0 at grade to 1 at the roof.")] = None,
+    rrs: Annotated[Optional[str], typer.Option(help="A CSV RRS for x1 instead of a standard.")] = None,
+    rrs_x2: Annotated[Optional[str], typer.Option("--rrs-x2", help="A CSV RRS for x2.")] = None,
+    rrs_damping: Annotated[Optional[float], typer.Option(help="The damping ratio the RRS files are drawn for.")] = None,
+    motions: Annotated[Optional[str], typer.Option(help="How many motions to make, or 'deck' (its own "
+                                                        "excitation.support).")] = None,
+    seed: Annotated[Optional[int], typer.Option(help="Random seed of the motions.")] = None,
+    duration: Annotated[Optional[float], typer.Option(help="Length of each motion [s] (AC156: 30).")] = None,
+    motion_dt: Annotated[Optional[float], typer.Option(help="Sample step of the motions [s].")] = None,
+    integrator: Annotated[Optional[str], typer.Option(help="Override analysis.integrator.")] = None,
+    dt: Annotated[Optional[float], typer.Option(help="Override analysis.dt [s].")] = None,
+    tolerance: Annotated[Optional[float], typer.Option(help="The accuracy asked for (see rbhyst run).")] = None,
+    out: Annotated[Optional[Path], typer.Option(
+        "--out", help="Output folder (default: the deck's output folder + '-qualify').")] = None,
+    plots: Annotated[bool, typer.Option("--plots/--no-plots", help="Write qualification.png.")] = True,
+):
+    """The verdict of a deck against a required response spectrum: qualification.json and .png.
+
+    Exit 0: it qualifies; 1: it does not (each failed criterion said); 2: a mistake in the
+    deck or options; 3: motions that cannot be matched, or a run that fails.
+    """
+    from .analyses.qualification.verdict import qualify as judge, request, verdict_lines
+    from .deck import ANALYSIS_SECTIONS, load_deck
+    from .outdir import staged_directory
+
+    with user_errors():
+        d = load_deck(deck, need=ANALYSIS_SECTIONS)
+        req = request(d, {"standard": standard, "sds": sds, "z_over_h": z_over_h, "rrs": rrs, "rrs_x2": rrs_x2,
+                          "rrs_damping": rrs_damping, "motions": motions, "seed": seed, "duration": duration,
+                          "motion_dt": motion_dt})
+        target = out if out is not None else _sibling_dir(d, deck, "-qualify")
+        with staged_directory(target) as tmp:
+            v = judge(d, req, tmp, integrator=integrator, dt=dt, tolerance=tolerance,
+                      plots=plots and d.output.plots, say=say)
+    for line in verdict_lines(v):
+        say(line)
+    say(f"wrote {target}")
+    if not v.passed:
+        raise typer.Exit(EXIT_VERDICT)
+
+
+#: ``rbhyst qualify``: the deck does not qualify
+EXIT_VERDICT = 1
+
+
 def output_dir(deck, deck_path: Path) -> Path:
     """output.directory relative to the deck's folder, default results/<deck stem>/."""
     if deck.output.directory is not None:

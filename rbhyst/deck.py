@@ -442,6 +442,35 @@ class Loops(_Model):
     points_per_cycle: Annotated[int, Field(ge=8)] = 2000
 
 
+class Qualify(_Model):
+    """What ``rbhyst qualify`` holds the deck to (see README, "Qualification"): a required
+    response spectrum (a standard's, or files), the motions, and the limits."""
+
+    standard: Literal["ac156"] | None = None
+    sds: PosFloat | None = None  # g, with standard = "ac156"
+    z_over_h: Annotated[float, Field(ge=0, le=1)] | None = None
+    rrs: str | None = None  # a CSV RRS for x1 (horizontal), instead of a standard
+    rrs_x2: str | None = None  # ... and for x2 (vertical)
+    rrs_damping: Ratio | None = None
+    #: how many motions to make, or "deck": the deck's own excitation.support
+    motions: Annotated[int, Field(ge=1)] | Literal["deck"] = 1
+    seed: Annotated[int, Field(ge=0)] = 1
+    duration: PosFloat = 30.0  # s, of each motion made
+    motion_dt: PosFloat = 0.005  # s, their sample step
+    #: peak total acceleration allowed at a point of interest ("G": the mass centre), g: one
+    #: number for both directions or [x1, x2]
+    acceleration_limit_g: dict[str, PosFloat | Annotated[list[PosFloat], Field(min_length=2, max_length=2)]] | None \
+        = None
+    #: the force each element can take, N: one number for all, or by CSV name (e1, e2, ...)
+    force_capacity_N: PosFloat | dict[str, PosFloat] | None = None
+
+    @model_validator(mode="after")
+    def _one_spectrum(self):
+        if self.standard is not None and self.rrs is not None:
+            raise _key_problems([("rrs", "not with qualify.standard: give a standard or RRS files")])
+        return self
+
+
 class Deck(_Model):
     title: str | None = None
     body: Body | None = None
@@ -452,6 +481,7 @@ class Deck(_Model):
     analysis: Analysis | None = None
     output: Output = Output()
     loops: Loops | None = None
+    qualify: Qualify | None = None
     #: the file the deck came from (None for one built in code): relative paths resolve beside it
     _source: Path | None = PrivateAttr(default=None)
 

@@ -60,7 +60,8 @@ def plot_trs(motions, rrs: dict, path: Path, title: str = "") -> None:
 
 
 @styled
-def plot_verdict(checks: dict, rrs: dict, criteria: list[dict], passed: bool, path: Path, title: str = "") -> None:
+def plot_verdict(checks: dict, rrs: dict, criteria: list[dict], passed: bool, path: Path, title: str = "",
+                 notes: tuple[str, ...] = ()) -> None:
     """TRS against RRS per axis (top), and every criterion's demand / capacity as a bar (bottom):
     green within its capacity, red beyond, the capacity at 1."""
     n_axes = max(1, len(rrs))
@@ -75,17 +76,24 @@ def plot_verdict(checks: dict, rrs: dict, criteria: list[dict], passed: bool, pa
     y = np.arange(len(criteria))[::-1]
     ax.barh(y, use, color=["#2e8b57" if c["pass"] else "#c0392b" for c in criteria], height=0.6)
     for yi, c, u in zip(y, criteria, use):
-        ax.annotate(f"{c['demand']:.4g} / {c['capacity']:.4g} {c['unit']}", (u, yi), textcoords="offset points",
-                    xytext=(4, -3), fontsize=7)
+        ax.annotate(f"{_number(c['demand'])} / {_number(c['capacity'])} {c['unit']}", (u, yi),
+                    textcoords="offset points", xytext=(4, -3), fontsize=7)
     ax.axvline(1.0, color="k", lw=1.0)
     ax.set_yticks(y, labels, fontsize=7)
     ax.set_xlim(0.0, max(1.25, float(use.max()) * 1.3 if len(use) else 1.25))
     ax.set_xlabel("demand / capacity")
+    if notes:
+        ax.set_title("; ".join(notes), fontsize=8)
     ax.grid(True, axis="x", alpha=0.3)
     verdict = "PASS" if passed else "FAIL"
     fig.suptitle(f"Qualification: {verdict}" + (f" — {title}" if title else ""), fontsize=10,
                  color="#2e8b57" if passed else "#c0392b")
     save(fig, path)
+
+
+def _number(v: float) -> str:
+    """4 significant digits, without an exponent for forces in the thousands."""
+    return f"{v:.0f}" if 1e3 <= abs(v) < 1e7 else f"{v:.4g}"
 
 
 def _figure(n_axes: int, n_crit: int):
