@@ -697,9 +697,9 @@ def qualify(
     Exit 0: it qualifies; 1: it does not (each failed criterion said); 2: a mistake in the
     deck or options; 3: motions that cannot be matched, or a run that fails.
     """
-    from .analyses.qualification.verdict import qualify as judge, request, verdict_lines
+    from .analyses.qualification.verdict import output_files, qualify as judge, request, verdict_lines
     from .deck import ANALYSIS_SECTIONS, load_deck
-    from .outdir import staged_directory
+    from .outdir import check_free, staged_directory
 
     with user_errors():
         d = load_deck(deck, need=ANALYSIS_SECTIONS)
@@ -707,6 +707,7 @@ def qualify(
                           "rrs_damping": rrs_damping, "motions": motions, "seed": seed, "duration": duration,
                           "motion_dt": motion_dt})
         target = out if out is not None else _sibling_dir(d, deck, "-qualify")
+        check_free(target, output_files(req) + (["qualification.png"] if plots and d.output.plots else []))
         with staged_directory(target) as tmp:
             v = judge(d, req, tmp, integrator=integrator, dt=dt, tolerance=tolerance,
                       plots=plots and d.output.plots, say=say)

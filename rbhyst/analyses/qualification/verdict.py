@@ -98,6 +98,15 @@ def request(deck, cli: dict) -> Request:
                    values.get("force_capacity_N"))
 
 
+def output_files(req: Request) -> list[str]:
+    """The files qualify writes (but the plot), to refuse a folder before the work."""
+    n = 1 if req.motions == "deck" else req.motions
+    files = ["qualification.json"] + [f"run_{k}/summary.json" for k in range(1, n + 1)]
+    if req.motions != "deck":
+        files += ["trs.csv", "motions.json"] + [f"motions/m{k}_{axis}.csv" for k in range(1, n + 1) for axis in req.rrs]
+    return files
+
+
 def _limit_problems(deck, values: dict) -> list[str]:
     problems = []
     names = [p.name for p in deck.output.points or []]
