@@ -49,6 +49,9 @@ def request(deck, cli: dict) -> Request:
     or the deck key they come from, all at once."""
     given = deck.qualify.model_dump(exclude_unset=True) if deck.qualify is not None else {}
     cli = {k: v for k, v in cli.items() if v is not None}
+    for k in ("rrs", "rrs_x2"):  # files named on the command line are where the command runs
+        if k in cli and cli[k].lower() not in ("ac156",):
+            cli[k] = str(Path(cli[k]).resolve())
     if "standard" in cli or "rrs" in cli:
         given = {k: v for k, v in given.items() if k not in _SPECTRUM_KEYS}
     values = {**given, **cli}
@@ -131,8 +134,9 @@ def _limit_problems(deck, values: dict) -> list[str]:
 # ---------------------------------------------------------------- the runs
 
 
-def _deck_with_motion(deck, support: dict | None):
-    """A copy of the deck driven by ``support`` (None: its own), whose analysis covers the motion."""
+def _deck_with_motion(deck, support: dict | None, duration: float | None = None, notes: list | None = None):
+    """A copy of the deck driven by ``support`` (None: its own), whose analysis covers the
+    motion's ``duration`` (a shorter analysis.duration is lengthened, with a note)."""
     from ...deck import parse_deck
 
     data = deck.model_dump(mode="python", exclude_unset=True)
@@ -140,6 +144,12 @@ def _deck_with_motion(deck, support: dict | None):
         ex = dict(data.get("excitation") or {})
         ex["support"] = support
         data["excitation"] = ex
+    own = data["analysis"].get("duration")
+    if duration is not None and own is not None and own < duration:
+        data["analysis"] = {**data["analysis"], "duration": duration}
+        if notes is not None and not notes:
+            notes.append(f"analysis.duration: {own:g} s is shorter than the motions ({duration:g} s): "
+                         "each run covers its whole motion")
     copy = parse_deck(data)
     copy._source = deck.source
     return copy
@@ -172,6 +182,7 @@ def qualify(deck, req: Request, folder: Path, integrator: str | None = None, dt:
     from ...model import assemble
 
     runs = []  # (label, summary dict)
+    notes: list[str] = []
     motion_facts, checks = [], {axis: [] for axis in req.rrs}
     trs_ok = True
     if req.motions == "deck":
@@ -195,7 +206,7 @@ def qualify(deck, req: Request, folder: Path, integrator: str | None = None, dt:
                 files[axis] = folder / "motions" / matching.record_name(m, axis)
                 files[axis].write_text(matching.record_text(m, axis, mark), encoding="utf-8")
                 checks[axis].append((f"TRS, motion {m.number}", m.records[axis].check))
-            decks.append((f"motion {m.number}", _deck_with_motion(deck, _support(files))))
+            decks.append((f"motion {m.number}", _deck_with_motion(deck, _support(files), m.duration, notes)))
         trs_ok = all(m.ok for m in made)
         (folder / "trs.csv").write_text("\n".join(matching.trs_rows(made)) + "\n", encoding="utf-8")
         summary = matching.motions_summary(made, req.rrs, req.standard)
@@ -231,6 +242,7 @@ def qualify(deck, req: Request, folder: Path, integrator: str | None = None, dt:
                 "max_correlation": matching.MAX_CORRELATION},
         "accuracy": accuracy,
         "warnings": warnings,
+        "notes": notes,
         "runs": [{"motion": label, "summary": f"run_{k}/summary.json"} for k, (label, _) in enumerate(runs, start=1)],
     }
     (folder / "qualification.json").write_text(json.dumps(data, indent=2) + "\n", encoding="utf-8")
@@ -239,12 +251,12 @@ def qualify(deck, req: Request, folder: Path, integrator: str | None = None, dt:
         from ...report.qualification import plot_verdict
 
         est = accuracy["estimated_error"]
-        notes = (f"TRS within the band: {'yes' if trs_ok else 'no'}",
+        heading = (f"TRS within the band: {'yes' if trs_ok else 'no'}",
                  f"estimated error {'not given' if est is None else f'{100 * est:.2g} %'} "
                  f"(at most {100 * deck.analysis.warn_error:g} %)",
                  f"warnings: {len(warnings) or 'none'}", data["statistic"])
         plot_verdict(checks, req.rrs, criteria, passed, folder / "qualification.png", title=deck.title or "",
-                     notes=notes)
+                     notes=heading)
     return verdict
 
 
@@ -343,7 +355,7 @@ def _accuracy(runs: list[tuple[str, dict]], warn_error: float) -> dict:
 def verdict_lines(v: Verdict) -> list[str]:
     """The console's account: each failed criterion, the least margin, and the verdict."""
     d = v.data
-    lines = []
+    lines = [f"note: {n}" for n in d["notes"]]
     for c in v.criteria:
         if not c["pass"]:
             lines.append(f"fail: {c['label']}: {c['demand']:.4g} {c['unit']} > {c['capacity']:.4g} {c['unit']}")
