@@ -120,7 +120,8 @@ def test_motions_end_at_rest_are_independent_and_strong_for_20_s(motion):
     assert dt == 0.005 and len(x1) == 6001 and x1[0] == 0.0 and x1[-1] == 0.0
     for a in (x1, x2):
         v, d = matching.integrate(a * G, dt)  # exact for a record linear between its samples
-        assert abs(v[-1]) < 1e-7 * np.abs(v).max() and abs(d[-1]) < 1e-7 * np.abs(d).max()
+        # to the rounding of the file's 10 digits (6e-8 of the peak displacement at most, on 60 motions)
+        assert abs(v[-1]) < 1e-6 * np.abs(v).max() and abs(d[-1]) < 1e-6 * np.abs(d).max()
     assert abs(np.corrcoef(x1, x2)[0, 1]) < 0.3
     facts = json.loads((motion / "motions.json").read_text())["motions"][0]
     assert facts["duration_s"] == 30.0 and facts["strong_motion_s"] == 20.0
@@ -279,17 +280,17 @@ def _cabinet(tmp_path, qualify: dict | None = None, **changes) -> Path:
 def test_the_verdict_takes_its_demands_from_the_runs_summary(tmp_path):
     import rbhyst
 
-    deck = _cabinet(tmp_path)
+    deck = DECKS / "cabinet_qualify.toml"  # the sample: strokes, a point at the top, [qualify]
     out = tmp_path / "q"
-    code, err = invoke("qualify", deck, "--out", out, "--motions", "2")
+    code, err = invoke("qualify", deck, "--out", out, "--motions", "2", "--seed", "2")
     assert code == 0, err
-    assert err.splitlines()[-2].startswith("verdict: pass: 10 criteria, 10 within capacity; least margin ")
+    assert err.splitlines()[-2].startswith("verdict: pass: 16 criteria, 16 within capacity; least margin ")
     q = json.loads((out / "qualification.json").read_text())
     assert q["pass"] and q["trs"]["pass"] and q["accuracy"]["pass"] and q["warnings"] == []
     assert q["statistic"] == "the largest over the 2 motions (fewer than seven: ASCE 7-10 16.2.4)"
     summaries = [json.loads((out / f"run_{k}" / "summary.json").read_text()) for k in (1, 2)]
     kinds = [c["criterion"] for c in q["criteria"]]
-    assert kinds == ["stroke"] * 4 + ["acceleration"] * 4 + ["force"] * 2
+    assert kinds == ["stroke"] * 4 + ["acceleration"] * 4 + ["force"] * 8
     for c in q["criteria"]:
         if c["criterion"] == "stroke":
             i = int(c["item"].split("[")[1].split("]")[0]) - 1

@@ -165,10 +165,12 @@ class Record:
     check: Check
     iterations: int
 
-    def facts(self, dt: float, strong: float) -> dict:
+    def facts(self, dt: float, strong: float, rrs: RRS) -> dict:
         acc = self.acc_g * G
         v, d = integrate(acc, dt)
-        return {"pga_g": float(np.max(np.abs(self.acc_g))), "iterations": self.iterations,
+        pga = float(np.max(np.abs(self.acc_g)))
+        return {"pga_g": pga, "pga_over_rrs_at_top": pga * G / float(rrs(rrs.check_range[1])),
+                "iterations": self.iterations,
                 "end_velocity_m_s": float(v[-1]), "end_displacement_m": float(d[-1]),
                 "peak_velocity_m_s": float(np.max(np.abs(v))), "peak_displacement_m": float(np.max(np.abs(d))),
                 "strong_motion_s": strong, "arias_5_95_s": arias_duration(acc, dt),
@@ -408,6 +410,6 @@ def motions_summary(motions: list[Motion], rrs: dict[str, RRS], standard: str | 
         "motions": [{"number": m.number, "seed": m.seed, "dt_s": m.dt, "duration_s": m.duration,
                      "strong_motion_s": m.strong, "correlation_x1_x2": m.correlation,
                      "files": {axis: record_name(m, axis) for axis in m.records},
-                     "axes": {axis: r.facts(m.dt, m.strong) for axis, r in m.records.items()}}
+                     "axes": {axis: r.facts(m.dt, m.strong, rrs[axis]) for axis, r in m.records.items()}}
                     for m in motions],
     }

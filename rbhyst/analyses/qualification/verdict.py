@@ -181,6 +181,7 @@ def qualify(deck, req: Request, folder: Path, integrator: str | None = None, dt:
     from ...api import run
     from ...model import assemble
 
+    folder = Path(folder).resolve()  # the runs' decks name the motions' files from their own folder
     runs = []  # (label, summary dict)
     notes: list[str] = []
     motion_facts, checks = [], {axis: [] for axis in req.rrs}
