@@ -614,10 +614,10 @@ def make_motion(
     rrs_x2: Annotated[Optional[str], typer.Option("--rrs-x2", help="A CSV RRS for x2 (vertical), with an RRS "
                                                                    "file for x1.")] = None,
     rrs_damping: Annotated[Optional[float], typer.Option(help="The damping ratio the RRS files are drawn for.")] = None,
-    sds: Annotated[Optional[float], typer.Option(help="AC156: S_DS [g].")] = None,
+    sds: Annotated[Optional[float], typer.Option(help="AC156: S_DS, in g.")] = None,
     z_over_h: Annotated[Optional[float], typer.Option(help="AC156: z/h, 0 at grade to 1 at the roof.")] = None,
-    duration: Annotated[float, typer.Option(help="Length [s] (AC156: 30 s, 20 s of them strong motion).")] = 30.0,
-    dt: Annotated[float, typer.Option(help="Sampling step [s].")] = 0.005,
+    duration: Annotated[float, typer.Option(help="Length in s (AC156: 30 s, 20 s of them strong motion).")] = 30.0,
+    dt: Annotated[float, typer.Option(help="Sampling step in s.")] = 0.005,
     seed: Annotated[int, typer.Option(help="Random seed: the same seed gives the same motions.")] = 1,
     motions: Annotated[int, typer.Option(min=1, help="Number of motions (each with its own noise).")] = 1,
     plots: Annotated[bool, typer.Option("--plots/--no-plots", help="Write trs.png.")] = True,
@@ -672,10 +672,10 @@ MOTION_MARK = "# rbhyst make-motion"
 
 @app.command(cls=Command)
 def qualify(
-    deck: Annotated[Path, typer.Argument(help="TOML or YAML deck (x1 horizontal, x2 vertical), with [qualify] or "
-                                              "the options below.")],
+    deck: Annotated[Path, typer.Argument(help="TOML or YAML deck (x1 horizontal, x2 vertical), with a qualify "
+                                              "section or the options below.")],
     standard: Annotated[Optional[str], typer.Option(help="The required response spectrum: ac156.")] = None,
-    sds: Annotated[Optional[float], typer.Option(help="AC156: S_DS [g].")] = None,
+    sds: Annotated[Optional[float], typer.Option(help="AC156: S_DS, in g.")] = None,
     z_over_h: Annotated[Optional[float], typer.Option(help="AC156: z/h, 0 at grade to 1 at the roof.")] = None,
     rrs: Annotated[Optional[str], typer.Option(help="A CSV RRS for x1 instead of a standard.")] = None,
     rrs_x2: Annotated[Optional[str], typer.Option("--rrs-x2", help="A CSV RRS for x2.")] = None,
@@ -683,10 +683,10 @@ def qualify(
     motions: Annotated[Optional[str], typer.Option(help="How many motions to make, or 'deck' (its own "
                                                         "excitation.support).")] = None,
     seed: Annotated[Optional[int], typer.Option(help="Random seed of the motions.")] = None,
-    duration: Annotated[Optional[float], typer.Option(help="Length of each motion [s] (AC156: 30).")] = None,
-    motion_dt: Annotated[Optional[float], typer.Option(help="Sample step of the motions [s].")] = None,
+    duration: Annotated[Optional[float], typer.Option(help="Length of each motion in s (AC156: 30).")] = None,
+    motion_dt: Annotated[Optional[float], typer.Option(help="Sample step of the motions in s.")] = None,
     integrator: Annotated[Optional[str], typer.Option(help="Override analysis.integrator.")] = None,
-    dt: Annotated[Optional[float], typer.Option(help="Override analysis.dt [s].")] = None,
+    dt: Annotated[Optional[float], typer.Option(help="Override analysis.dt, in s.")] = None,
     tolerance: Annotated[Optional[float], typer.Option(help="The accuracy asked for (see rbhyst run).")] = None,
     out: Annotated[Optional[Path], typer.Option(
         "--out", help="Output folder (default: the deck's output folder + '-qualify').")] = None,

@@ -230,6 +230,7 @@ def case_key(deck: Deck, digests: FileDigests) -> str:
     """sha256 (hex, first 32 digits) of what the case's result depends on (see the module)."""
     data = deck.model_dump(mode="json")
     data.pop("title", None)
+    data.pop("qualify", None)  # what `rbhyst qualify` holds the deck to: no number of a run
     data["output"] = {"every": data["output"]["every"]}
     ex = data.get("excitation") or {}
     for group, comp in SIGNAL_KEYS:
