@@ -1,1 +1,4 @@
-"""Analyses built on runs: what a question about a deck needs beyond one time history."""
+"""Layer 5, analyses: what is built on runs. The response spectrum of a record,
+transmissibility, the convergence study, calibration of hysteresis parameters, sweeps, and
+qualification to the standards (required response spectra, spectrum-compatible motions, the
+verdict)."""

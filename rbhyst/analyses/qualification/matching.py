@@ -33,8 +33,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ...errors import AnalysisError, InputError
-from .rrs import AC156_DURATION, AC156_STRONG, G, RRS, sixth_octave
+from rbhyst.errors import AnalysisError, InputError
+from rbhyst.analyses.qualification.rrs import AC156_DURATION, AC156_STRONG, G, RRS, sixth_octave
 
 #: the TRS is aimed at this multiple of the RRS: the middle of the 0.9-1.3 band in logarithm
 AIM = math.sqrt(0.9 * 1.3)
@@ -102,7 +102,7 @@ def in_file_digits(acc_g: np.ndarray) -> np.ndarray:
 
 def trs(acc: np.ndarray, dt: float, freqs: np.ndarray, damping: float) -> np.ndarray:
     """sa (m/s2) at ``freqs`` of a record (m/s2) followed by rest, as ``rbhyst spectrum`` computes it."""
-    from ...response.located import GROUND, SpectraSink, rest_samples
+    from rbhyst.solve.located import GROUND, SpectraSink, rest_samples
 
     periods = np.sort(1.0 / np.asarray(freqs, float))
     sink = SpectraSink([(GROUND, "x1")], [damping], periods, dt)
@@ -396,7 +396,7 @@ def trs_rows(motions: list[Motion]) -> list[str]:
 
 def motions_summary(motions: list[Motion], rrs: dict[str, RRS], standard: str | None) -> dict:
     """motions.json: the method, the RRS and, per motion and axis, what the record is."""
-    from ... import __version__
+    from rbhyst._version import __version__
 
     return {
         "rbhyst_version": __version__,

@@ -25,9 +25,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ...errors import InputError
-from ...file_units import header_labels, label_unit
-from ...textfiles import is_number, read_text
+from rbhyst.errors import InputError
+from rbhyst.files.curves import Curve, read_curve
+from rbhyst.files.units import label_unit
 
 G = 9.80665
 ACCEL_TO_SI = {"g": G, "m/s2": 1.0, "cm/s2": 0.01, "mg": G / 1000.0}
@@ -117,52 +117,7 @@ def sixth_octave(f_lo: float, f_hi: float) -> np.ndarray:
     return f if f[-1] >= f_hi * (1 - 1e-9) else np.append(f, f_hi)
 
 
-# ---------------------------------------------------------------- curves from files
-
-
-@dataclass(frozen=True)
-class Curve:
-    """Two columns of a text table: x ascending, y, the header's labels and each row's line."""
-
-    x: np.ndarray
-    y: np.ndarray
-    labels: list[str]
-    header_line: int | None
-    lines: list[int]
-
-
-def read_curve(path: Path, what: str) -> Curve:
-    """A two-column table (commas, semicolons or spaces; '#' comments; one header row), x
-    strictly increasing and positive, y positive; problems name the file and line."""
-    lines = read_text(path).splitlines()
-    rows, where, labels, header_line = [], [], [], None
-    for j, line in enumerate(lines, start=1):
-        text = line.split("#", 1)[0].strip()
-        if not text:
-            continue
-        toks = [t for t in text.replace(";", ",").replace(",", " ").split()]
-        if not rows and header_line is None and not is_number(toks[0]):
-            header_line, labels = j, header_labels(text)
-            continue
-        if len(toks) != 2:
-            raise InputError(f"{path}:{j}: {len(toks)} columns; {what} has two (frequency, value)")
-        try:
-            row = [float(t) for t in toks]
-        except ValueError:
-            bad = next(t for t in toks if not is_number(t))
-            raise InputError(f"{path}:{j}: {bad!r} is not a number") from None
-        if not all(math.isfinite(v) for v in row):
-            raise InputError(f"{path}:{j}: not a finite number")
-        if row[0] <= 0.0 or row[1] <= 0.0:
-            raise InputError(f"{path}:{j}: the frequency and the value must be positive (log-log interpolation)")
-        if rows and row[0] <= rows[-1][0]:
-            raise InputError(f"{path}:{j}: the frequency {row[0]:g} Hz does not increase (previous {rows[-1][0]:g} Hz)")
-        rows.append(row)
-        where.append(j)
-    if len(rows) < 2:
-        raise InputError(f"{path}: {what} needs at least two rows of numbers, found {len(rows)}")
-    data = np.array(rows)
-    return Curve(data[:, 0], data[:, 1], labels, header_line, where)
+# ---------------------------------------------------------------- from files
 
 
 def frequency_label_problem(path: Path, curve: Curve) -> str | None:

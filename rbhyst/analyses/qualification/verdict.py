@@ -20,9 +20,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ...errors import InputError
-from . import matching
-from .rrs import G, RRS, requested_rrs
+from rbhyst.analyses.qualification import matching
+from rbhyst.analyses.qualification.rrs import G, RRS, requested_rrs
+from rbhyst.errors import InputError
 
 #: from this many motions on the demand is the mean over them, below it the largest (ASCE 7-10 16.2.4)
 MEAN_FROM = 7
@@ -137,7 +137,7 @@ def _limit_problems(deck, values: dict) -> list[str]:
 def _deck_with_motion(deck, support: dict | None, duration: float | None = None, notes: list | None = None):
     """A copy of the deck driven by ``support`` (None: its own), whose analysis covers the
     motion's ``duration`` (a shorter analysis.duration is lengthened, with a note)."""
-    from ...deck import parse_deck
+    from rbhyst.model.deck import parse_deck
 
     data = deck.model_dump(mode="python", exclude_unset=True)
     if support is not None:
@@ -166,6 +166,7 @@ class Verdict:
     data: dict
     criteria: list[dict]
     checks: dict = field(default_factory=dict)  # axis -> [(label, Check)] for the plot
+    heading: tuple[str, ...] = ()  # what the plot says above the bars
 
     @property
     def passed(self) -> bool:
@@ -173,13 +174,14 @@ class Verdict:
 
 
 def qualify(deck, req: Request, folder: Path, integrator: str | None = None, dt: float | None = None,
-            tolerance: float | None = None, plots: bool = True, say=None) -> Verdict:
+            tolerance: float | None = None, say=None) -> Verdict:
     """Make or take the motions, run the deck on each, judge every criterion; write into ``folder``
     (a staging folder): qualification.json, trs.csv, motions.json (with motions made), the
-    motions' records, run_<k>/summary.json and qualification.png."""
-    from ... import __version__
-    from ...api import run
-    from ...model import assemble
+    motions' records and run_<k>/summary.json (the plot is the caller's: report.qualification)."""
+    from rbhyst._version import __version__
+    from rbhyst.model.system import assemble
+    from rbhyst.results.analysis import run_deck
+    from rbhyst.results.writers import write_summary
 
     folder = Path(folder).resolve()  # the runs' decks name the motions' files from their own folder
     runs = []  # (label, summary dict)
@@ -216,10 +218,10 @@ def qualify(deck, req: Request, folder: Path, integrator: str | None = None, dt:
     for k, (label, d) in enumerate(decks, start=1):
         if say is not None:
             say(f"running {label} ({k} of {len(decks)})")
-        result = run(d, integrator=integrator, dt=dt, tolerance=tolerance, keep=False)
+        result = run_deck(d, keep=False, integrator=integrator, dt=dt, tolerance=tolerance)
         s = result.summary()
         (folder / f"run_{k}").mkdir()
-        (folder / f"run_{k}" / "summary.json").write_text(json.dumps(s, indent=2) + "\n")
+        write_summary(result, folder / f"run_{k}" / "summary.json")  # as rbhyst run writes it
         runs.append((label, s))
     criteria = _criteria(deck, req, [s for _, s in runs])
     accuracy = _accuracy(runs, deck.analysis.warn_error)
@@ -247,25 +249,19 @@ def qualify(deck, req: Request, folder: Path, integrator: str | None = None, dt:
         "runs": [{"motion": label, "summary": f"run_{k}/summary.json"} for k, (label, _) in enumerate(runs, start=1)],
     }
     (folder / "qualification.json").write_text(json.dumps(data, indent=2) + "\n", encoding="utf-8")
-    verdict = Verdict(data, criteria, checks)
-    if plots:
-        from ...report.qualification import plot_verdict
-
-        est = accuracy["estimated_error"]
-        heading = (f"TRS within the band: {'yes' if trs_ok else 'no'}",
-                 f"estimated error {'not given' if est is None else f'{100 * est:.2g} %'} "
-                 f"(at most {100 * deck.analysis.warn_error:g} %)",
-                 f"warnings: {len(warnings) or 'none'}", data["statistic"])
-        plot_verdict(checks, req.rrs, criteria, passed, folder / "qualification.png", title=deck.title or "",
-                     notes=heading)
-    return verdict
+    est = accuracy["estimated_error"]
+    heading = (f"TRS within the band: {'yes' if trs_ok else 'no'}",
+               f"estimated error {'not given' if est is None else f'{100 * est:.2g} %'} "
+               f"(at most {100 * deck.analysis.warn_error:g} %)",
+               f"warnings: {len(warnings) or 'none'}", data["statistic"])
+    return Verdict(data, criteria, checks, heading)
 
 
 def _deck_trs(excitation, duration: float, rrs: dict[str, RRS]) -> dict:
-    """The TRS of the deck's own support motion per axis, from its signals (rbhyst.response.ground)."""
-    from ...response.ground import ground_spectra
-    from ...response.located import rest_samples
-    from .rrs import sixth_octave
+    """The TRS of the deck's own support motion per axis, from its signals (rbhyst.solve.ground)."""
+    from rbhyst.analyses.qualification.rrs import sixth_octave
+    from rbhyst.solve.ground import ground_spectra
+    from rbhyst.solve.located import rest_samples
 
     out = {}
     for axis, r in rrs.items():
