@@ -109,11 +109,12 @@ def load_sweep(path: str | Path) -> Sweep:
     for m in motions:  # every file named must exist before anything runs
         for c in ("x1", "x2"):
             comp = (m.support or {}).get(c)
-            if comp and comp.get("file"):
-                try:
-                    digests(comp["file"])
-                except InputError as err:
-                    problems.append(f"{m.where}.{c}.file: {err.problems[0]}")
+            for key in ("file", "psd"):  # a record, a random signal's PSD file
+                if comp and isinstance(comp.get(key), str):
+                    try:
+                        digests(comp[key])
+                    except InputError as err:
+                        problems.append(f"{m.where}.{c}.{key}: {err.problems[0]}")
     if problems:
         raise InputError(problems)
     combos, vary_keys = _combinations(spec, [m.name for m in motions], levels)
@@ -231,12 +232,14 @@ def case_key(deck: Deck, digests: FileDigests) -> str:
     """sha256 (hex, first 32 digits) of what the case's result depends on (see the module)."""
     data = deck.model_dump(mode="json")
     data.pop("title", None)
+    data.pop("qualify", None)  # what `rbhyst qualify` holds the deck to: no number of a run
     data["output"] = {"every": data["output"]["every"]}
     ex = data.get("excitation") or {}
     for group, comp in SIGNAL_KEYS:
         sig = (ex.get(group) or {}).get(comp)
-        if isinstance(sig, dict) and sig.get("file") is not None:
-            p = Path(sig["file"])
-            sig["file"] = "sha256:" + digests(str(p if p.is_absolute() else deck.base / p))
+        for key in ("file", "psd"):  # a record's file, a random signal's PSD file
+            if isinstance(sig, dict) and isinstance(sig.get(key), str):
+                p = Path(sig[key])
+                sig[key] = "sha256:" + digests(str(p if p.is_absolute() else deck.base / p))
     text = json.dumps({"deck": data, "rbhyst_version": __version__}, sort_keys=True, allow_nan=False)
     return hashlib.sha256(text.encode()).hexdigest()[:32]
