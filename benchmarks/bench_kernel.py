@@ -47,7 +47,7 @@ def main() -> None:
     ne = system.bvec.shape[0]
     # like the C loop: the whole run as one chunk into the same output buffers every repeat
     t_grid = settings.dt * np.arange(n + 1)
-    load = np.ascontiguousarray(system.excitation.load(t_grid, system.mass))
+    load = np.ascontiguousarray(system.excitation.load_nodes(t_grid, settings.dt, system.mass))
     buf = _Buffers(n, ne, system.n)
     times = []
     for _ in range(args.repeat):

@@ -1,2 +1,4 @@
 """Layer 5, analyses: what is built on runs. The response spectrum of a record,
-transmissibility, the convergence study, calibration of hysteresis parameters, sweeps."""
+transmissibility, the convergence study, calibration of hysteresis parameters, sweeps, and
+qualification to the standards (required response spectra, spectrum-compatible motions, the
+verdict)."""

@@ -20,6 +20,7 @@ from pydantic import (BaseModel, ConfigDict, Discriminator, Field, PrivateAttr, 
 from pydantic_core import PydanticCustomError
 
 from rbhyst.errors import InputError
+from rbhyst.model.integrators import INTEGRATORS
 from rbhyst.model.periods import default_periods
 from rbhyst.files.textfiles import read_text
 from rbhyst.model.hysteresis import limiting_curve, limiting_slope, parameter_set, reversal_stiffness
@@ -35,9 +36,6 @@ AccelUnits = Literal["g", "m/s2", "cm/s2"]
 ForceUnits = Literal["N", "kN"]
 MomentUnits = Literal["N m", "kN m"]
 U = TypeVar("U")
-
-#: the integrators by name (rbhyst.solve.integrators implements each), the default first
-INTEGRATORS = ("chang", "central-difference", "newmark", "kr-alpha", "reference", "adaptive")
 
 
 class _Model(BaseModel):
@@ -247,6 +245,39 @@ class Pulse(_Model, Generic[U]):
     start: Annotated[float, Field(ge=0)] = 0.0
 
 
+PSD_UNITS = Literal["g2/Hz", "(m/s2)2/Hz"]
+
+
+class Random(_Model):
+    """A stationary Gaussian support acceleration with a power spectral density: breakpoints
+    [[frequency_hz, value], ...] (log-log between them, as MIL-STD-810 tables give them) or a CSV
+    file of them; ``duration`` s long, the same history for the same ``seed`` (see
+    rbhyst.model.random_vibration). ``dt``: its sample step (default a tenth of the period
+    of the PSD's highest frequency); ``scale`` multiplies the history (the PSD by its square)."""
+
+    type: Literal["random"]
+    psd: str | list[list[float]]
+    units: PSD_UNITS
+    duration: PosFloat
+    seed: Annotated[int, Field(ge=0)]
+    dt: PosFloat | None = None
+    scale: float = 1.0
+
+    @field_validator("psd", mode="before")
+    @classmethod
+    def _breakpoints(cls, v):
+        if isinstance(v, list):
+            from rbhyst.model.random_vibration import psd_problems
+
+            problems = psd_problems(v)
+            if problems and problems[0][0] is None:
+                raise ValueError(problems[0][1])
+            if problems:
+                raise _key_problems(problems)
+            return [[float(x) for x in p] for p in v]
+        return v
+
+
 def _signal_kind(v: Any) -> str:
     kind = v.get("type", "record") if isinstance(v, dict) else getattr(v, "type", "record")
     return "pulse" if kind in PULSES else kind
@@ -260,9 +291,18 @@ def _signal(units):
     ]
 
 
+def _support_signal():
+    """What a support acceleration may be: a signal of _signal, or random vibration."""
+    return Annotated[
+        Union[Annotated[Record[AccelUnits], Tag("record")], Annotated[Sine[AccelUnits], Tag("sine")],
+              Annotated[Pulse[AccelUnits], Tag("pulse")], Annotated[Random, Tag("random")]],
+        Discriminator(_signal_kind),
+    ]
+
+
 class Support(_Model):
-    x1: _signal(AccelUnits) | None = None
-    x2: _signal(AccelUnits) | None = None
+    x1: _support_signal() | None = None
+    x2: _support_signal() | None = None
 
 
 class Force(_Model):
@@ -400,6 +440,35 @@ class Loops(_Model):
     points_per_cycle: Annotated[int, Field(ge=8)] = 2000
 
 
+class Qualify(_Model):
+    """What ``rbhyst qualify`` holds the deck to (see README, "Qualification"): a required
+    response spectrum (a standard's, or files), the motions, and the limits."""
+
+    standard: Literal["ac156"] | None = None
+    sds: PosFloat | None = None  # g, with standard = "ac156"
+    z_over_h: Annotated[float, Field(ge=0, le=1)] | None = None
+    rrs: str | None = None  # a CSV RRS for x1 (horizontal), instead of a standard
+    rrs_x2: str | None = None  # ... and for x2 (vertical)
+    rrs_damping: Ratio | None = None
+    #: how many motions to make, or "deck": the deck's own excitation.support
+    motions: Annotated[int, Field(ge=1)] | Literal["deck"] = 1
+    seed: Annotated[int, Field(ge=0)] = 1
+    duration: PosFloat = 30.0  # s, of each motion made
+    motion_dt: PosFloat = 0.005  # s, their sample step
+    #: peak total acceleration allowed at a point of interest ("G": the mass centre), g: one
+    #: number for both directions or [x1, x2]
+    acceleration_limit_g: dict[str, PosFloat | Annotated[list[PosFloat], Field(min_length=2, max_length=2)]] | None \
+        = None
+    #: the force each element can take, N: one number for all, or by CSV name (e1, e2, ...)
+    force_capacity_N: PosFloat | dict[str, PosFloat] | None = None
+
+    @model_validator(mode="after")
+    def _one_spectrum(self):
+        if self.standard is not None and self.rrs is not None:
+            raise _key_problems([("rrs", "not with qualify.standard: give a standard or RRS files")])
+        return self
+
+
 class Deck(_Model):
     title: str | None = None
     body: Body | None = None
@@ -410,6 +479,7 @@ class Deck(_Model):
     analysis: Analysis | None = None
     output: Output = Output()
     loops: Loops | None = None
+    qualify: Qualify | None = None
     #: the file the deck came from (None for one built in code): relative paths resolve beside it
     _source: Path | None = PrivateAttr(default=None)
 
@@ -467,6 +537,63 @@ def split_key(key: str) -> list[str | int]:
     if not parts or pos != len(key):
         raise KeyError("cannot read the key")
     return parts
+
+
+#: the unit of each deck key with one, by its path with list indices left out ("*": any name);
+#: "" a pure number (a ratio, a count), "signal" the units of the signal it belongs to
+KEY_UNITS: dict[tuple[str, ...], str] = {
+    ("body", "mass"): "kg", ("body", "inertia"): "kg m²", ("body", "vertices"): "m",
+    ("body", "mass_centre"): "m", ("body", "gravity"): "m/s²",
+    ("body", "parts", "mass"): "kg", ("body", "parts", "vertices"): "m",
+    **{("hysteresis", "*", "*", name): unit for name, unit in (
+        ("kb", "N/m"), ("f0", "N"), ("alpha", "1/m"), ("beta1", "N"), ("beta2", "1/m"), ("gamma1", "N"),
+        ("gamma2", "1/m"), ("gamma3", "m"))},
+    **{(group, name): unit for group in ("elements", "dampers") for name, unit in (
+        ("angle_deg", "°"), ("point", "m"), ("count", ""), ("vertex", ""), ("part", ""))},
+    ("elements", "stroke"): "m", ("dampers", "c"): "N s/m",
+    **{(*group, "*", name): unit for group in (("excitation", "support"), ("excitation", "force"))
+       for name, unit in (("amplitude", "signal"), ("scale", ""), ("frequency_hz", "Hz"), ("phase_deg", "°"),
+                          ("start", "s"), ("duration", "s"), ("dt", "s"), ("cycles", ""), ("ramp_cycles", ""))},
+    ("excitation", "force", "point"): "m",
+    ("analysis", "dt"): "s", ("analysis", "duration"): "s", ("analysis", "max_omega_dt"): "",
+    ("analysis", "max_substep_level"): "", ("analysis", "rtol"): "", ("analysis", "tolerance"): "",
+    ("analysis", "warn_error"): "", ("output", "every"): "", ("output", "spectra", "damping"): "",
+    ("output", "spectra", "periods_s"): "s", ("output", "points", "point"): "m",
+    ("loops", "amplitude"): "m", ("loops", "frequency_hz"): "Hz", ("loops", "cycles"): "",
+    ("loops", "points_per_cycle"): "",
+    ("qualify", "sds"): "g", ("qualify", "z_over_h"): "", ("qualify", "rrs_damping"): "",
+    ("qualify", "motions"): "", ("qualify", "seed"): "", ("qualify", "duration"): "s", ("qualify", "motion_dt"): "s",
+    ("qualify", "acceleration_limit_g", "*"): "g", ("qualify", "force_capacity_N"): "N",
+    ("qualify", "force_capacity_N", "*"): "N",
+}
+#: units as written in a deck, as an axis shows them
+_SHOWN_UNITS = {"m/s2": "m/s²", "cm/s2": "cm/s²"}
+
+
+def key_unit(key: str, data: dict | None = None) -> str | None:
+    """The unit of a dotted deck key (``"body.mass"`` -> ``"kg"``, ``"elements[2].count"`` ->
+    ``""``), None where it has none to tell (a name, a key rbhyst does not know). A signal's
+    ``amplitude`` takes the ``units`` beside it in ``data`` (the deck as a mapping)."""
+    try:
+        parts = split_key(key)
+    except KeyError:
+        return None
+    names = tuple(p for p in parts if isinstance(p, str))
+    for pattern, unit in KEY_UNITS.items():
+        if len(pattern) == len(names) and all(a in ("*", b) for a, b in zip(pattern, names)):
+            break
+    else:
+        return None
+    if unit != "signal":
+        return unit
+    node: Any = data
+    for part in parts[:-1]:
+        try:
+            node = node[part]
+        except (KeyError, IndexError, TypeError):
+            return None
+    units = node.get("units") if isinstance(node, dict) else None
+    return _SHOWN_UNITS.get(units, units) if isinstance(units, str) else None
 
 
 def set_dotted(data: dict, key: str, value: Any) -> None:
@@ -585,7 +712,7 @@ def _format_loc(loc: tuple) -> str:
     for part in loc:
         if isinstance(part, int):
             out += f"[{part + 1}]"
-        elif part in ("record", "sine", "pulse") or str(part).startswith(("Record[", "Sine[", "Pulse[")):
+        elif part in ("record", "sine", "pulse", "random") or str(part).startswith(("Record[", "Sine[", "Pulse[")):
             continue  # the union's tag is noise to a user
         elif re.fullmatch(r"[A-Za-z0-9_\-]+", str(part)):
             out += ("." if out else "") + str(part)
@@ -608,8 +735,12 @@ def _messages(err: ValidationError) -> list[str]:
             lines += [f"{_format_loc((*e['loc'], key))}: {m}" for key, m in e["ctx"]["problems"]]
             continue
         elif e["type"] == "union_tag_invalid":
-            msg = (f"unknown type {e['ctx']['tag']!r}: use type = \"sine\" or a pulse "
+            support = "support" in e["loc"]
+            random = ", \"random\"" if support else ""
+            msg = (f"unknown type {e['ctx']['tag']!r}: use type = \"sine\"{random} or a pulse "
                    f"({', '.join(repr(p) for p in PULSES)}), or give `file` (and no type) for a record")
+            if e["ctx"]["tag"] == "random" and not support:
+                msg = "type \"random\" is random vibration of the support: excitation.support.x1 or x2 only"
         lines.append(f"{_format_loc(e['loc'])}: {msg}")
     return list(dict.fromkeys(lines))
 
