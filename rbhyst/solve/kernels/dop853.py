@@ -88,22 +88,26 @@ def _bdot(bvec, e, y, first, n):
 
 @njit(cache=True, error_model="numpy", _nrt=False)
 def _rhs(t, y, k, brk, pcoef, sig, minv, bvec, mult, params, cm, s, up, gp, p, dy):
-    """dy = (v, M^-1 (p - R - C v), p . v, v . C v) (seed eq. 11); p (3, n) is work space (the
-    load, R, C v); returns the first element that overflowed, or -1."""
+    """dy = (v, M^-1 (p - R - C v), p . v, v . C v) (seed eq. 11); p (4, max(n, ne)) is work
+    space (the load, R, C v, each element's mult f); returns the first element that
+    overflowed, or -1."""
     n = len(minv)
     load = p[0]
     r = p[1]
     cv = p[2]
+    mf = p[3]
     _load(t, k, brk, pcoef, sig, load, n)
-    for i in range(n):
-        r[i] = 0.0
     for e in range(bvec.shape[0]):
         f, _, ok = _force(params, e, s[e], up[e], gp[e], _bdot(bvec, e, y, 0, n))
         if not ok:
             return e
-        mf = mult[e] * f
-        for i in range(n):
-            r[i] += mf * bvec[e, i]
+        mf[e] = mult[e] * f
+    for i in range(n):
+        # R = sum mult f b, each component summed in a register in the elements' order
+        acc = 0.0
+        for e in range(bvec.shape[0]):
+            acc += mf[e] * bvec[e, i]
+        r[i] = acc
     for i in range(n):
         dy[i] = y[n + i]
         acc = cm[i, 0] * y[n]
@@ -147,7 +151,7 @@ def _g_dense(F, y_old, x, bvec, e, s, n):
 @njit(cache=True, error_model="numpy", _nrt=False)
 def _integrate(minv, bvec, mult, params, cm, brk, pcoef, sig, t_out, rtol, atol, init, y0, h_first, max_steps,
                A, B, C, E3, E5, D, out_y, out_eu, out_ef, out_eh, info, el, vec, K, F, p, gs):
-    """The whole integration; el (6, ne), vec (7, ny), K (16, ny), F (7, ny), p (3, n), gs (NS + 1,)
+    """The whole integration; el (6, ne), vec (7, ny), K (16, ny), F (7, ny), p (4, max(n, ne)), gs (NS + 1,)
     are its work space (allocated by the caller: no reference counting in here), y0 (n,) the start."""
     ne = bvec.shape[0]
     n = len(minv)
