@@ -168,3 +168,15 @@ def test_the_kernels_linear_algebra_for_any_n(n):
     np.testing.assert_allclose(out, normalized, rtol=1e-12, atol=1e-12 * np.abs(normalized).max())
     top = sym_max_eig(out.copy(), n)
     assert abs(top - np.linalg.eigvalsh(normalized)[-1]) < 1e-10 * abs(top)
+
+
+def test_a_one_coordinate_run_estimates_its_error_and_summarizes_itself():
+    """The results layer needs no plane either: the error estimate covers the body's own
+    columns, and the summary its own peaks."""
+    from rbhyst.results.analysis import analyse
+
+    res = analyse(one_dof({"ag1": sine(2.0, 0.8)}), dataclasses.replace(settings("chang"), estimate=True))
+    error = res.accuracy["estimated_error"]
+    assert set(error) == {"u1", "at1", "R1", "e1_f"}
+    assert max(error.values()) < 1e-3 and res.warnings == []
+    assert set(res.summary()["peaks"]) >= {"u1_m", "at1_m_s2", "ag1_m_s2", "R1_N", "e1_f_N"}

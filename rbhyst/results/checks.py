@@ -36,13 +36,16 @@ def diagnose(result: Result) -> tuple[list[str], list[str]]:
     if result.energy_balance > ENERGY_WARN:
         warnings.append(f"energy balance error {result.energy_balance:.2%} exceeds {ENERGY_WARN:.0%}: reduce dt")
     e = result.extremes
-    theta = e.peak("theta3_rad")
-    if theta > ROTATION_WARN:
-        i = e.names.index("theta3_rad")
-        t = e.t_max[i] if abs(e.max[i]) >= abs(e.min[i]) else e.t_min[i]
-        warnings.append(f"the rotation reaches {theta:.3g} rad at t = {t:.4g} s, beyond the small rotations of the "
-                        f"seed's kinematics (eqs. 7-8, about {theta / 2:.1%} error in point motions; rbhyst warns "
-                        f"above {ROTATION_WARN:g} rad)")
+    for c in result.system.coordinates:  # every rotation of q (theta3 in the plane)
+        if not c.rotation:
+            continue
+        theta = e.peak(c.column("d"))
+        if theta > ROTATION_WARN:
+            i = e.names.index(c.column("d"))
+            t = e.t_max[i] if abs(e.max[i]) >= abs(e.min[i]) else e.t_min[i]
+            warnings.append(f"the rotation reaches {theta:.3g} rad at t = {t:.4g} s, beyond the small rotations of the "
+                            f"seed's kinematics (eqs. 7-8, about {theta / 2:.1%} error in point motions; rbhyst warns "
+                            f"above {ROTATION_WARN:g} rad)")
     warnings += stroke_warnings(result)
     if result.system.static is not None:
         more_notes, more_warnings = gravity_checks(result)
