@@ -47,7 +47,6 @@ STEP_BUDGET = 400
 #: 100-300 rtol on the sample decks and cases), then 100 times tighter until met or RTOL_MIN
 RTOL_PER_TOL = 1e-3
 RTOL_MIN = 1e-13
-COORDINATES = ("u1", "u2", "theta3")
 #: a column whose reference stays below this fraction of its family's scale is at rest: its error
 #: is measured against the family's scale (the rotation of a symmetric scene, a cross acceleration)
 AT_REST = 1e-9

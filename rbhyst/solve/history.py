@@ -56,7 +56,7 @@ class Layout:
         """points: (name, (x1, x2) in the deck's frame) of each point of interest (output.points)."""
         self.system = system
         ex = system.excitation
-        coords = getattr(system, "coordinates", PLANE)
+        coords = system.coordinates
         n = len(coords)
         self.has_support = ex.has_support
         self.damped = bool(system.dampers)
