@@ -72,10 +72,8 @@ def run_chunk(method, coef, mass, minv, cm, damped, bvec, mult, params, wgt,
     info[I_STATUS] = OK
     row = 0
     for j in range(n_steps * nsub_c):
-        # the state to restart this compute step from if a substep is rejected
-        copy_vector(d, w[W_SD], n)
-        copy_vector(v, w[W_SV], n)
-        copy_vector(a, w[W_SA], n)
+        # the state to restart this compute step from if a substep is rejected: a rejected first
+        # substep has changed nothing, so it is copied only where there are several
         s_in, s_hyst, s_visc, s_cur = e_in, e_hyst, e_visc, cur
         saved = False
         level = max(level - 1, min_level)
@@ -83,6 +81,9 @@ def run_chunk(method, coef, mass, minv, cm, damped, bvec, mult, params, wgt,
             nsub = 1 << level
             if nsub > 1 and not saved:
                 copy_rows(st[cur], st_save)  # substeps overwrite both buffers: keep the start
+                copy_vector(d, w[W_SD], n)
+                copy_vector(v, w[W_SV], n)
+                copy_vector(a, w[W_SA], n)
                 saved = True
             inv_nsub = 1.0 / nsub
             h = h_c * inv_nsub
@@ -146,12 +147,12 @@ def run_chunk(method, coef, mass, minv, cm, damped, bvec, mult, params, wgt,
                     level_used = max(level_used, level)
                 break
             # restart the compute step with twice as many substeps
-            copy_vector(w[W_SD], d, n)
-            copy_vector(w[W_SV], v, n)
-            copy_vector(w[W_SA], a, n)
             e_in, e_hyst, e_visc = s_in, s_hyst, s_visc
             cur = s_cur
             if saved:
+                copy_vector(w[W_SD], d, n)
+                copy_vector(w[W_SV], v, n)
+                copy_vector(w[W_SA], a, n)
                 copy_rows(st_save, st[cur])
             level += 1
 
