@@ -52,7 +52,9 @@ class Layout:
         self.system = system
         ex = system.excitation
         self.has_support = ex.has_support
-        self.damped = bool(system.dampers)
+        self.dampers = bool(system.dampers)  # their columns
+        # viscous work (and C v in the accelerations) with dampers or Rayleigh damping
+        self.damped = self.dampers or getattr(system, "rayleigh", None) is not None
         names = list(BASE_COLUMNS)
         self.slices: dict[str, slice] = {"d": slice(1, 4), "v": slice(4, 7), "a": slice(7, 10), "at": slice(10, 13)}
         if self.has_support:
@@ -69,7 +71,7 @@ class Layout:
         self.slices["elements"] = slice(len(names), len(names) + 2 * n_el)
         for k in range(1, n_el + 1):
             names += [f"e{k}_u_m", f"e{k}_f_N"]
-        if self.damped:
+        if self.dampers:
             n_d = len(system.damper_c)
             self.slices["dampers"] = slice(len(names), len(names) + 2 * n_d)
             for k in range(1, n_d + 1):
@@ -125,7 +127,7 @@ class Layout:
         el = self.slices["elements"]
         out[:, el.start:el.stop:2] = raw.u[:, self._expand]
         out[:, el.start + 1:el.stop:2] = raw.f[:, self._expand]
-        if self.damped:
+        if self.dampers:
             dv = raw.v @ self._db
             ds = self.slices["dampers"]
             out[:, ds.start:ds.stop:2] = dv

@@ -157,6 +157,7 @@ class Result:
             "elements": self._elements_summary(),
             **({"dampers": [{"x_m": list(dp.x), "angle_deg": dp.angle_deg, "c_N_s_m": dp.c, "count": dp.count}
                             for dp in system.dampers]} if system.dampers else {}),
+            **({"rayleigh": system.rayleigh.summary()} if getattr(system, "rayleigh", None) is not None else {}),
             **({"static": self._static_summary()} if system.static is not None else {}),
             "analysis": {
                 "integrator": s.integrator,
