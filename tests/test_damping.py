@@ -54,8 +54,8 @@ def test_free_decay_gives_the_ratios_at_the_two_frequencies(tmp_path, rayleigh):
     want = rayleigh["ratio"] if isinstance(rayleigh["ratio"], list) else [rayleigh["ratio"]] * 2
     zeta_u = decrement_ratio(res.time, res.column("u1_m"), after=0.02)
     zeta_theta = decrement_ratio(res.time, res.column("theta3_rad"), after=0.02)
-    assert zeta_u == pytest.approx(want[0], rel=2e-3)
-    assert zeta_theta == pytest.approx(want[1], rel=2e-3)
+    assert zeta_u == pytest.approx(want[0], rel=1e-6)
+    assert zeta_theta == pytest.approx(want[1], rel=1e-6)
     ray = res.summary()["rayleigh"]
     np.testing.assert_allclose(sorted(ray["mode_frequencies_hz"]),
                                np.array([W_TRANSLATION, W_TRANSLATION, W_ROTATION]) / (2 * math.pi), rtol=1e-12)
