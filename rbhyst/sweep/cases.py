@@ -66,6 +66,7 @@ class Sweep:
     motions: list[str]
     vary_keys: list[str]
     cases: list[Case] = field(default_factory=list)
+    fragility: Any = None  # analyses.fragility.FragilityPlan, with [[limit_states]]
 
     @property
     def stem(self) -> str:
@@ -119,6 +120,10 @@ def load_sweep(path: str | Path) -> Sweep:
     sweep = Sweep(path=path, spec=spec, deck_path=deck_path, base=base, scale_kind=kind, levels=levels,
                   motions=[m.name for m in motions], vary_keys=vary_keys)
     sweep.cases = _cases(deck, motions, combos, kind, own, digests)
+    if spec.limit_states:
+        from ..analyses.fragility import plan_fragility
+
+        sweep.fragility = plan_fragility(sweep)
     return sweep
 
 

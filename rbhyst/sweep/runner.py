@@ -70,7 +70,7 @@ class Outcome:
 Progress = Callable[[int, int, int], None]  # (cases done, of which failed, cases to compute)
 
 
-def final_files(save_histories: bool, plots: bool) -> list[str]:
+def final_files(save_histories: bool, plots: bool, fragility: bool = False) -> list[str]:
     names = [CASES_CSV, STATS_CSV, SWEEP_JSON]
     if save_histories:
         names.append(HISTORIES_FILE)
@@ -78,6 +78,10 @@ def final_files(save_histories: bool, plots: bool) -> list[str]:
         from ..report.sweep import PLOT_FILES
 
         names.extend(PLOT_FILES)
+    if fragility:
+        from ..analyses.fragility import files
+
+        names.extend(files(plots))
     return names
 
 
@@ -117,7 +121,7 @@ def run_sweep(sweep: Sweep, out: str | Path | None = None, workers: int | None =
         from .histories import require_pyarrow
 
         require_pyarrow()
-    check_out(out, final_files(save_histories, plots))
+    check_out(out, final_files(save_histories, plots, sweep.fragility is not None))
     journal = Journal(out, fresh=fresh)
     outcome = Outcome(sweep, out, t_start=time.perf_counter())
     todo: dict[str, dict] = {}
@@ -306,6 +310,10 @@ def _write_files(outcome: Outcome, journal: Journal, save_histories: bool, plots
             from ..report.sweep import write_plots
 
             write_plots(header, rows, sweep.vary_keys, sweep.scale_kind, tmp)
+        if sweep.fragility is not None:
+            from ..analyses.fragility import write_fragility
+
+            write_fragility(sweep.fragility, header, rows, tmp, plots)
 
 
 def _about(outcome: Outcome) -> dict:
@@ -327,6 +335,7 @@ def _about(outcome: Outcome) -> dict:
         "statistics": f"stats.csv over the motions of each scale level and vary combination: mean, median "
                       f"and p84 = numpy.percentile(x, {PERCENTILE:g}) (linear interpolation between order "
                       f"statistics), max",
+        **({"fragility": sweep.fragility.about()} if sweep.fragility is not None else {}),
         "case_key": "sha256 of the case's validated deck (without title, output.directory, output.plots), "
                     "each record file replaced by the sha256 of its bytes, and the rbhyst version",
     }

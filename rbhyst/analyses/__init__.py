@@ -1,0 +1,1 @@
+"""Analyses built on the cases of a sweep: fragility curves."""
