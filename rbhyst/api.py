@@ -46,9 +46,12 @@ def run(deck: Deck | str | Path, integrator: str | None = None, dt: float | None
     if estimate is not None:
         settings = dataclasses.replace(settings, estimate=estimate)
     system = assemble(d, d.base)
+    as_run = deck_as_run(d, integrator=integrator, dt=dt, tolerance=tolerance, estimate_error=estimate)
     progress = None if monitor is None else monitor.update
     if out is None:
-        return _solve(system, settings, keep=keep, progress=progress)
+        result = _solve(system, settings, keep=keep, progress=progress)
+        result.deck = as_run
+        return result
     from .outdir import staged_directory
 
     plan = _plan(system, settings)  # what can fail before a file is touched
@@ -59,11 +62,22 @@ def run(deck: Deck | str | Path, integrator: str | None = None, dt: float | None
         result = _solve(system, settings, keep=False, csv_path=tmp / "time_history.csv", plan=plan,
                         progress=progress)
         result.notes = early + result.notes
+        result.deck = as_run
         if progress is not None and (d.output.plots if plots is None else plots):
             progress(0, 0, "drawing the figures")
         _write_rest(result, tmp, d.output.plots if plots is None else plots)
     result.csv_path = Path(out) / "time_history.csv"
     return result
+
+
+def deck_as_run(deck: Deck, **overrides) -> dict:
+    """The deck's keys as given, with the run's overrides (integrator, dt, tolerance,
+    estimate_error) in [analysis]: what summary.json keeps of the deck, so that a report can show what ran."""
+    data = deck.model_dump(mode="json", exclude_unset=True)
+    given = {k: v for k, v in overrides.items() if v is not None}
+    if given:
+        data.setdefault("analysis", {}).update(given)
+    return data
 
 
 def _plan(system, settings):

@@ -64,6 +64,7 @@ class Result:
     compared: np.ndarray | None = None
     compare_every: int = 1
     spectra: "LocatedSpectra | None" = None  # output.spectra: of the ground, G and the points, over every step
+    deck: dict | None = None  # the deck as run (its keys as given, the run's overrides applied)
 
     @property
     def q_sample(self) -> np.ndarray:
@@ -189,6 +190,7 @@ class Result:
             "notes": list(self.notes),
             "warnings": list(self.warnings),
             **({"spectra": self.spectra.summary()} if self.spectra is not None else {}),
+            **({"deck": self.deck} if self.deck is not None else {}),
         }
 
     def _elements_summary(self) -> list[dict]:
