@@ -542,7 +542,7 @@ def plan_fragility(sweep) -> FragilityPlan | None:
         k = first.setdefault(ls.name, i)
         if k != i:
             problems.append(f"limit_states[{i}].name: {ls.name!r} is the name of limit_states[{k}] too")
-    systems = _systems(sweep)
+    systems = _systems(sweep, per_motion=options.intensity != "scale")
     known: dict[str, None] = {}
     for _, system, points in systems.values():
         known.update(dict.fromkeys(_columns(system, points)))
@@ -569,10 +569,10 @@ def plan_fragility(sweep) -> FragilityPlan | None:
     return FragilityPlan(list(spec.limit_states), quantities, options, intensity, list(sweep.vary_keys))
 
 
-def _systems(sweep) -> dict[int, tuple]:
-    """The assembled deck of the first case of each motion and of each vary combination:
-    {case number: (case, System, points)}; a case whose deck cannot be assembled (a record that
-    cannot be read) is left out, as it fails when it runs."""
+def _systems(sweep, per_motion: bool) -> dict[int, tuple]:
+    """The assembled deck of the first case of each vary combination (and of each motion, where
+    the intensity is the motion's): {case number: (case, System, points)}; a case whose deck
+    cannot be assembled (a record that cannot be read) is left out, as it fails when it runs."""
     from ..errors import InputError
     from ..model import assemble
     from ..settings import settings_from_deck
@@ -581,7 +581,7 @@ def _systems(sweep) -> dict[int, tuple]:
     seen_m, seen_v = set(), set()
     for c in sweep.cases:
         v = tuple(sorted((k, repr(x)) for k, x in c.vary.items()))
-        if c.problem is None and (c.motion not in seen_m or v not in seen_v):
+        if c.problem is None and ((per_motion and c.motion not in seen_m) or v not in seen_v):
             chosen[c.number] = c
             seen_m.add(c.motion)
             seen_v.add(v)
