@@ -1,5 +1,5 @@
-"""Builds rbhyst's compiled kernels ahead of time (rbhyst/kernels/aot.py) as the extension
-rbhyst.kernels._aot; everything else is in pyproject.toml.
+"""Builds rbhyst's compiled kernels ahead of time (rbhyst/solve/kernels/aot.py) as the extension
+rbhyst.solve.kernels._aot; everything else is in pyproject.toml.
 
 Where the build cannot compile them (no C compiler, an unusual platform) the install still
 succeeds: rbhyst then compiles them with numba on first use and caches them.
@@ -33,7 +33,7 @@ def extensions():
         return []
     try:
         sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-        from rbhyst.kernels.aot import compiler
+        from rbhyst.solve.kernels.aot import compiler
 
         ext = compiler().distutils_extension(optional=True)
         ext.depends = []  # (numba names its source by absolute path, which a manifest cannot hold)

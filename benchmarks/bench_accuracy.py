@@ -29,8 +29,8 @@ def best(f, n=3):
 
 def main() -> None:
     import rbhyst
-    from rbhyst.accuracy import relative_errors
-    from rbhyst.integrators import reference
+    from rbhyst.solve.estimate import relative_errors
+    from rbhyst.solve.integrators import reference
 
     ap = argparse.ArgumentParser()
     ap.add_argument("--deck", action="append")

@@ -24,11 +24,11 @@ HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 sys.path.insert(0, str(ROOT))
 
-from rbhyst import integrators  # noqa: E402
-from rbhyst.deck import load_deck  # noqa: E402
-from rbhyst.model import assemble  # noqa: E402
-from rbhyst.settings import settings_from_deck  # noqa: E402
-from rbhyst.simulate import _Buffers, prepare  # noqa: E402
+from rbhyst.solve import integrators  # noqa: E402
+from rbhyst.model.deck import load_deck  # noqa: E402
+from rbhyst.model.system import assemble  # noqa: E402
+from rbhyst.model.settings import settings_from_deck  # noqa: E402
+from rbhyst.solve.plan import _Buffers, prepare  # noqa: E402
 
 
 def main() -> None:

@@ -23,8 +23,8 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from rbhyst.response import SpectrumAccumulator, default_periods, response_spectrum  # noqa: E402
-from rbhyst.response.spectra import substep_counts  # noqa: E402
-from rbhyst.synthetic import ground_motion  # noqa: E402
+from rbhyst.solve.spectra import substep_counts  # noqa: E402
+from rbhyst.model.synthetic import ground_motion  # noqa: E402
 
 N_SAMPLES, DAMPINGS = 40_000, (0.05, 0.02)
 

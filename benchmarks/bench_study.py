@@ -22,10 +22,10 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from rbhyst.deck import load_deck  # noqa: E402
-from rbhyst.integrators import reference  # noqa: E402
-from rbhyst.model import assemble  # noqa: E402
-from rbhyst.simulate import settings_from_deck  # noqa: E402
+from rbhyst.model.deck import load_deck  # noqa: E402
+from rbhyst.solve.integrators import reference  # noqa: E402
+from rbhyst.model.system import assemble  # noqa: E402
+from rbhyst.solve.plan import settings_from_deck  # noqa: E402
 
 
 def main() -> None:

@@ -47,7 +47,7 @@ def one_case_breakdown() -> None:
 
 
 def bench(n: int, folder: Path, workers: int | None = None, scheduler: str | None = None) -> dict:
-    from rbhyst.sweep import load_sweep, run_sweep
+    from rbhyst.analyses.sweep import load_sweep, run_sweep
 
     sw = load_sweep(sweep_file(folder, n))
     out = folder / f"out_{n}_{'dask' if scheduler else 'local'}"

@@ -23,7 +23,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 import rbhyst  # noqa: E402
-from rbhyst.response.transmissibility import steady_state, stepped_sine  # noqa: E402
+from rbhyst.analyses.transmissibility import steady_state, stepped_sine  # noqa: E402
 
 if __name__ == "__main__":
     ap = argparse.ArgumentParser()

@@ -1,4 +1,4 @@
-/* The same scheme as rbhyst.kernels.run with Chang's method, in plain C, for the
+/* The same scheme as rbhyst.solve.kernels.run with Chang's method, in plain C, for the
  * kernel benchmark (bench_kernel.py): Chang step, VRM update with the gap and the
  * antiderivative carried per element (seed eqs. 14-17), exact element work, input
  * energy, the trace bound on omega_max and the per-step state save. Reads the arrays

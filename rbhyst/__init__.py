@@ -3,7 +3,7 @@
 The Python API (see README, "Python API"): ``load_deck``, ``run``, and the ``Result`` they give.
 """
 
-__version__ = "0.2.0"
+from rbhyst._version import __version__
 
 __all__ = ["load_deck", "run", "InputError", "AnalysisError", "__version__"]
 
@@ -11,11 +11,11 @@ __all__ = ["load_deck", "run", "InputError", "AnalysisError", "__version__"]
 def __getattr__(name):
     # the API is imported on first use: `import rbhyst` stays cheap for the command line
     if name in ("load_deck", "run"):
-        from . import api
+        from rbhyst import api
 
         return getattr(api, name)
     if name in ("InputError", "AnalysisError"):
-        from . import errors
+        from rbhyst import errors
 
         return getattr(errors, name)
     raise AttributeError(f"module 'rbhyst' has no attribute {name!r}")

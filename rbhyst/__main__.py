@@ -1,3 +1,5 @@
-from .cli import entry
+"""Top layer: ``python -m rbhyst``, the command line."""
+
+from rbhyst.cli import entry
 
 entry()

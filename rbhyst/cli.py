@@ -11,9 +11,10 @@ from typing import Annotated, Optional
 
 import typer
 
-from . import __version__, outdir
-from .errors import AnalysisError, InputError
-from .terminal import Command, Group, Progress
+from rbhyst._version import __version__
+from rbhyst.files import outdir
+from rbhyst.errors import AnalysisError, InputError
+from rbhyst.terminal import Command, Group, Progress
 
 app = typer.Typer(
     cls=Group,
@@ -71,8 +72,9 @@ def run(
     report: Annotated[bool, typer.Option("--report", help="Also write report.html (see `rbhyst report`).")] = False,
 ):
     """Time-history analysis of the deck: time_history.csv, summary.json and PNG plots."""
-    from . import api, kernels
-    from .deck import ANALYSIS_SECTIONS
+    from rbhyst import api
+    from rbhyst.solve.kernels import compiled as kernels
+    from rbhyst.model.deck import ANALYSIS_SECTIONS
 
     if not kernels.cached(kernels.run_kernels()):
         say("note: compiling the numba kernels, once (a minute at most); later runs load them from the cache")
@@ -82,13 +84,13 @@ def run(
             d = api.load_deck(deck, need=ANALYSIS_SECTIONS)
             target = out if out is not None else output_dir(d, deck)
             if report:
-                from .report.html import check_report_target
+                from rbhyst.report.html import check_report_target
 
                 check_report_target(target)
             result = api.run(d, integrator=integrator, dt=dt, out=target, plots=plots and d.output.plots,
                              tolerance=tolerance, monitor=monitor)
             if report:
-                from .report.html import write_report
+                from rbhyst.report.html import write_report
 
                 write_report(target)
     finally:
@@ -104,7 +106,7 @@ def run(
 
 def run_line(result) -> str:
     """The console's one line on a run: method, steps, time, peak displacements and accelerations."""
-    from .deck import ACCEL_UNITS
+    from rbhyst.model.deck import ACCEL_UNITS
 
     e, s = result.extremes, result.settings
     g = ACCEL_UNITS["g"]
@@ -137,10 +139,10 @@ def calibrate_plot(
         "--out", help="Output folder (default: results/<deck stem>-loops/ beside the deck).")] = None,
 ):
     """Force-displacement loops of VRM sets: loops.png, loops_<set>.csv, summary.json (fit.json with --data)."""
-    from .calibration import header, loop_result, protocol, safe_names, write_json, write_loop_csv
-    from .deck import load_deck
-    from .outdir import staged_directory
-    from .testdata import read_loop_data
+    from rbhyst.analyses.calibration import header, loop_result, protocol, safe_names, write_json, write_loop_csv
+    from rbhyst.model.deck import load_deck
+    from rbhyst.files.outdir import staged_directory
+    from rbhyst.model.testdata import read_loop_data
 
     with user_errors():
         d = load_deck(deck)  # the sets (and [loops]) are enough
@@ -170,7 +172,7 @@ def calibrate_plot(
                                               "hysteretic_work_J": float(r.work[-1]),
                                               "dissipated_per_cycle_J": r.dissipated} for r in results}},
                            tmp / "fit.json")
-            from .report.loops import plot_loops
+            from rbhyst.report.loops import plot_loops
 
             plot_loops(results, tmp / "loops.png", title=d.title)
     for r in results:
@@ -201,11 +203,10 @@ def calibrate(
     """Identify a VRM set from measured loops: fitted.toml (deck fragment), fit.json, loops.png."""
     import tomllib
 
-    from .calibration import (NAMES, check_orientation, deck_fragment, fit_set, header, loop_result,
-                              parameters_dict, parse_names, round_set, safe_names, write_json, write_loop_csv)
-    from .deck import load_deck, parse_deck
-    from .outdir import staged_directory
-    from .testdata import read_loop_data
+    from rbhyst.analyses.calibration import (NAMES, check_orientation, deck_fragment, fit_set, header, loop_result, parameters_dict, parse_names, round_set, safe_names, write_json, write_loop_csv)
+    from rbhyst.model.deck import load_deck, parse_deck
+    from rbhyst.files.outdir import staged_directory
+    from rbhyst.model.testdata import read_loop_data
 
     with user_errors():
         d = load_deck(init)
@@ -245,7 +246,7 @@ def calibrate(
             (tmp / "fitted.toml").write_text(fragment, encoding="utf-8")
             write_json(report, tmp / "fit.json")
             write_loop_csv(res, tmp / f"loops_{safe_names([set_name])[set_name]}.csv")
-            from .report.loops import plot_loops
+            from rbhyst.report.loops import plot_loops
 
             plot_loops([res], tmp / "loops.png", initial={set_name: p0},
                        title=f"{set_name} fitted to {measured.name}")
@@ -310,11 +311,11 @@ def study(
     from rich.console import Console
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
-    from .deck import load_deck
-    from .model import assemble
-    from .outdir import staged_directory
-    from .simulate import grid, settings_from_deck
-    from .study import check_dts, check_integrators, fixed_step_names, run_study, write_csv, write_json
+    from rbhyst.model.deck import load_deck
+    from rbhyst.model.system import assemble
+    from rbhyst.files.outdir import staged_directory
+    from rbhyst.solve.plan import grid, settings_from_deck
+    from rbhyst.analyses.study import check_dts, check_integrators, fixed_step_names, run_study, write_csv, write_json
 
     with user_errors():
         d = load_deck(deck)
@@ -341,7 +342,7 @@ def study(
             write_csv(result, tmp / "study.csv")
             write_json(result, tmp / "study.json")
             if plots and d.output.plots:
-                from .report.study import write_plots
+                from rbhyst.report.study import write_plots
 
                 write_plots(result, tmp)
     for note in system.notes:
@@ -386,21 +387,21 @@ def sweep(
     from rich.console import Console
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn, TimeRemainingColumn
 
-    from . import kernels
-    from .sweep import SweepIncomplete, load_sweep, run_sweep
+    from rbhyst.solve.kernels import compiled as kernels
+    from rbhyst.sweep import SweepIncomplete, load_sweep, run_sweep
 
     with user_errors():
         sw = load_sweep(sweep_file)
         target = out if out is not None else sw.default_out()
         if report:
-            from .report.html import check_report_target
+            from rbhyst.report.html import check_report_target
 
             check_report_target(target)
-        from .kernels.loop import run_chunk
+        from rbhyst.solve.kernels.loop import run_chunk
 
         if scheduler is None and not kernels.cached([run_chunk]):
             say("note: compiling the numba kernels, once (a minute at most); the workers load them from the cache")
-            from .api import run as _run
+            from rbhyst.api import run as _run
 
             _run(sw.short_deck())
         console = Console(stderr=True)
@@ -438,14 +439,14 @@ def sweep(
                 say(f"error: {err}")
                 raise typer.Exit(EXIT_ANALYSIS) from None
             except Interrupted as exc:
-                from .sweep.store import FOLDER
+                from rbhyst.analyses.sweep.store import FOLDER
 
                 say(f"interrupted: the finished cases are kept in {target / FOLDER}; "
                     "the same command computes the rest")
                 outdir.received.clear()
                 raise typer.Exit(128 + exc.signum) from None
         if report:
-            from .report.html import write_report
+            from rbhyst.report.html import write_report
 
             write_report(target)
     failed = outcome.failed
@@ -472,7 +473,7 @@ def report(
 
     It is added to the folder's files: the run's or the sweep's own stay as they are.
     """
-    from .report.html import write_report
+    from rbhyst.report.html import write_report
 
     with user_errors():
         path = write_report(folder)
@@ -498,9 +499,9 @@ def spectrum(
     plots: Annotated[bool, typer.Option("--plots/--no-plots", help="Write spectra.png.")] = True,
 ):
     """Response spectra of a support acceleration record: spectra.csv and spectra.png."""
-    from .outdir import staged_directory
-    from .response.located import write_spectra_csv
-    from .response.record import record_spectrum
+    from rbhyst.files.outdir import staged_directory
+    from rbhyst.results.writers import write_spectra_csv
+    from rbhyst.analyses.record_spectrum import record_spectrum
 
     with user_errors():
         spectra = record_spectrum(record, units, dt=dt, dampings=_split_list(damping, "--damping", float),
@@ -510,7 +511,7 @@ def spectrum(
         with staged_directory(target) as tmp:
             write_spectra_csv(spectra, tmp / "spectra.csv")
             if plots:
-                from .report.spectra import plot_spectra
+                from rbhyst.report.spectra import plot_spectra
 
                 plot_spectra(spectra, tmp / "spectra.png", title=record.name)
     s = spectra.spectrum
@@ -545,9 +546,9 @@ def transmissibility(
     from rich.console import Console
     from rich.progress import BarColumn, Progress, TextColumn, TimeElapsedColumn
 
-    from .deck import ACCEL_UNITS, load_deck
-    from .outdir import staged_directory
-    from .response.transmissibility import frequency_list, request_problems, stepped_sine, write_csv, write_json
+    from rbhyst.model.deck import ACCEL_UNITS, load_deck
+    from rbhyst.files.outdir import staged_directory
+    from rbhyst.analyses.transmissibility import frequency_list, request_problems, stepped_sine, write_csv, write_json
 
     with user_errors():
         d = load_deck(deck)
@@ -577,7 +578,7 @@ def transmissibility(
             write_csv(result, tmp / "transmissibility.csv")
             write_json(result, tmp / "transmissibility.json")
             if plots and d.output.plots:
-                from .report.transmissibility import plot_transmissibility
+                from rbhyst.report.transmissibility import plot_transmissibility
 
                 plot_transmissibility(result, tmp / "transmissibility.png", title=d.title or "")
     for note in result.notes:
@@ -620,8 +621,8 @@ def make_record(
 
     import numpy as np
 
-    from .outdir import replace_own_file
-    from .synthetic import ground_motion
+    from rbhyst.files.outdir import replace_own_file
+    from rbhyst.model.synthetic import ground_motion
 
     with user_errors():
         t, acc = ground_motion(duration=duration, dt=dt, pga=pga, seed=seed, f_g=f_g)
@@ -662,7 +663,7 @@ def _interrupt(signum, frame):
 
 def main() -> None:
     """The entry point: Ctrl-C (exit 130) and SIGTERM (exit 143) end a command with one line, and
-    the staging cleanup (rbhyst.outdir) sees them: nothing half-written stays behind."""
+    the staging cleanup (rbhyst.files.outdir) sees them: nothing half-written stays behind."""
     outdir.received.clear()
     for s in (signal.SIGINT, signal.SIGTERM):
         signal.signal(s, _interrupt)

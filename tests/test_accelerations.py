@@ -16,9 +16,9 @@ import numpy as np
 import pytest
 
 import rbhyst
-from rbhyst.accuracy import column_errors
-from rbhyst.history import body_spectrum_columns, estimate_columns
-from rbhyst.integrators import reference
+from rbhyst.solve.estimate import column_errors
+from rbhyst.solve.history import body_spectrum_columns, estimate_columns
+from rbhyst.solve.integrators import reference
 from rbhyst.response import response_spectrum
 from conftest import ROOT, linear_set, write_deck
 

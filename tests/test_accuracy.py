@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 
 import rbhyst
-from rbhyst.accuracy import column_errors
-from rbhyst.history import estimate_columns
+from rbhyst.solve.estimate import column_errors
+from rbhyst.solve.history import estimate_columns
 from rbhyst.errors import AnalysisError
-from rbhyst.integrators import reference
+from rbhyst.solve.integrators import reference
 from conftest import DECKS, ROOT, seed_deck, write_deck
 
 CASES = ROOT.parent / "shared" / "cases"

@@ -14,7 +14,7 @@ from conftest import DECKS
 CODE = r"""
 import json, sys
 import os, rbhyst
-from rbhyst.kernels.compiled import ahead_of_time
+from rbhyst.solve.kernels.compiled import ahead_of_time
 if not os.environ.get("RBHYST_JIT") and not ahead_of_time():
     print(json.dumps(None)); sys.exit()
 res = rbhyst.run(sys.argv[1], integrator=sys.argv[2])
@@ -44,12 +44,12 @@ def test_ahead_of_time_equals_jit_and_loads_no_numba(tmp_path, method):
 
 def test_a_stale_build_is_never_used(tmp_path, monkeypatch):
     """The build is stamped with its sources: once they change, the JIT kernels are used."""
-    from rbhyst.kernels import aot, compiled
+    from rbhyst.solve.kernels import aot, compiled
 
     compiled._aot.cache_clear()
     monkeypatch.setattr(aot, "source_stamp", lambda: -1)
     try:
         assert compiled.ahead_of_time() is False
-        assert compiled.kernel("run_chunk").__module__ == "rbhyst.kernels.loop"
+        assert compiled.kernel("run_chunk").__module__ == "rbhyst.solve.kernels.loop"
     finally:
         compiled._aot.cache_clear()

@@ -11,11 +11,12 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from rbhyst.calibration import NAMES, drive_sensitivity, fit_set, nrmse, parse_names, protocol
+from rbhyst.analyses.calibration import NAMES, drive_sensitivity, fit_set, nrmse, parse_names, protocol
 from rbhyst.cli import app
-from rbhyst.deck import Loops, load_deck, parse_deck
+from rbhyst.model.deck import Loops, load_deck, parse_deck
 from rbhyst.errors import AnalysisError, InputError
-from rbhyst.hysteresis import loop, parameter_set
+from rbhyst.model.hysteresis import parameter_set
+from rbhyst.model.vrm import loop
 
 DECKS = Path(__file__).resolve().parents[1] / "decks"
 FIG2 = load_deck(DECKS / "seed_fig2_loops.toml")
@@ -272,7 +273,7 @@ def test_bad_data_one_line_exit_2_nothing_written(tmp_path, command, case):
 
 
 def test_the_good_rows_read(tmp_path):
-    from rbhyst.testdata import read_loop_data
+    from rbhyst.model.testdata import read_loop_data
 
     data = tmp_path / "data.csv"
     data.write_text("u_mm,f_kN\n" + "\n".join(GOOD) + "\n")

@@ -13,7 +13,7 @@ import tomllib
 from typer.testing import CliRunner
 
 from rbhyst.cli import app
-from rbhyst.results import BASE_COLUMNS, ENERGY_COLUMNS
+from rbhyst.solve.result import BASE_COLUMNS, ENERGY_COLUMNS
 from conftest import DECKS, seed_deck, write_deck
 
 runner = CliRunner()

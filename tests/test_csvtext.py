@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from rbhyst.csvtext import format_rows
+from rbhyst.results.csvtext import format_rows
 
 
 def test_every_value_is_printf_s_10_significant_digits():

@@ -19,8 +19,8 @@ from pathlib import Path
 import pytest
 import tomli_w
 
-from rbhyst.outdir import STAGING_PREFIX
-from rbhyst.sweep.store import FOLDER, JOURNAL, line_sum
+from rbhyst.files.outdir import STAGING_PREFIX
+from rbhyst.analyses.sweep.store import FOLDER, JOURNAL, line_sum
 from conftest import DECKS, invoke, seed_deck, snapshot, write_deck
 
 

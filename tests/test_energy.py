@@ -6,10 +6,10 @@ import pytest
 from typer.testing import CliRunner
 
 from rbhyst.cli import app
-from rbhyst.deck import parse_deck
-from rbhyst.model import assemble
-from rbhyst.outdir import staged_directory
-from rbhyst.simulate import Settings, simulate
+from rbhyst.model.deck import parse_deck
+from rbhyst.model.system import assemble
+from rbhyst.files.outdir import staged_directory
+from rbhyst.solve.plan import Settings, simulate
 from conftest import seed_deck, square_linear_deck, write_deck
 
 

@@ -12,8 +12,8 @@ from typer.testing import CliRunner
 
 from rbhyst.cli import app
 from rbhyst.errors import InputError
-from rbhyst.file_units import at2_declarations, check_declared, header_labels, label_unit
-from rbhyst.records import read_record
+from rbhyst.files.units import at2_declarations, check_declared, header_labels, label_unit
+from rbhyst.model.records import read_record
 from conftest import DECKS, records_or_skip, seed_deck, write_deck
 
 runner = CliRunner()

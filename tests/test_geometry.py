@@ -1,7 +1,7 @@
 import numpy as np
 import pytest
 
-from rbhyst.geometry import PolygonError, polygon
+from rbhyst.model.geometry import PolygonError, polygon
 from conftest import SEED_MASS, SEED_VERTICES
 
 

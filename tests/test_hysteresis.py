@@ -4,9 +4,10 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from rbhyst import hysteresis as hy
-from rbhyst.hysteresis import limiting_curve, loop, parameter_set
-from rbhyst.kernels import vrm
+from rbhyst.model import hysteresis as hy
+from rbhyst.model.hysteresis import limiting_curve, parameter_set
+from rbhyst.model.vrm import loop
+from rbhyst.model import vrm
 from conftest import TABLE1, TABLE3_AXIAL, TABLE3_SHEAR
 
 

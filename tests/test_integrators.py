@@ -17,14 +17,14 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from rbhyst import integrators
+from rbhyst.solve import integrators
 from rbhyst.cli import app
-from rbhyst.deck import parse_deck
+from rbhyst.model.deck import parse_deck
 from rbhyst.errors import AnalysisError
-from rbhyst.integrators import kr_alpha
-from rbhyst.model import assemble
-from rbhyst.simulate import Settings, simulate
-from rbhyst.study import run_study
+from rbhyst.solve.integrators import kr_alpha
+from rbhyst.model.system import assemble
+from rbhyst.solve.plan import Settings, simulate
+from rbhyst.analyses.study import run_study
 from conftest import records_or_skip, seed_deck, square_linear_deck, write_deck
 
 SECOND_ORDER = ["chang", "central-difference", "newmark", "kr-alpha"]
@@ -214,7 +214,7 @@ def test_every_method_documents_order_stability_and_dissipation():
 
     for name in integrators.names():
         method = integrators.get(name)
-        module = importlib.import_module(f"rbhyst.integrators.{name.replace('-', '_')}")
+        module = importlib.import_module(f"rbhyst.solve.integrators.{name.replace('-', '_')}")
         doc = (module.__doc__ or "").lower()
         assert "order" in doc and "stab" in doc or method.solve is not None, name
         assert "dissipat" in doc or method.solve is not None or name == "central-difference", name

@@ -5,9 +5,9 @@ import math
 import numpy as np
 import pytest
 
-from rbhyst.deck import parse_deck
-from rbhyst.model import assemble
-from rbhyst.simulate import Settings, simulate
+from rbhyst.model.deck import parse_deck
+from rbhyst.model.system import assemble
+from rbhyst.solve.plan import Settings, simulate
 from conftest import square_linear_deck
 
 K, MASS, SIDE = 2.0e5, 500.0, 1.0

@@ -86,7 +86,7 @@ class Listener:
 def test_a_large_output_is_said_before_the_run_starts(tmp_path, monkeypatch):
     """Beyond 1 GB the run says so before it starts, with the output.every that keeps the CSV
     under 100 MB (here both limits a hundredth as large, so that the test writes 0.1 GB, not 1)."""
-    import rbhyst.simulate as sim
+    import rbhyst.solve.plan as sim
 
     monkeypatch.setattr(sim, "LARGE_CSV_BYTES", 1e7)
     monkeypatch.setattr(sim, "SMALL_CSV_BYTES", 1e6)

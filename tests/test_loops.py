@@ -14,10 +14,10 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-from rbhyst.calibration import cycles_of, loop_result, protocol
+from rbhyst.analyses.calibration import cycles_of, loop_result, protocol
 from rbhyst.cli import app
-from rbhyst.deck import Loops, load_deck
-from rbhyst.hysteresis import limiting_curve
+from rbhyst.model.deck import Loops, load_deck
+from rbhyst.model.hysteresis import limiting_curve
 
 DECKS = Path(__file__).resolve().parents[1] / "decks"
 FIG2 = DECKS / "seed_fig2_loops.toml"

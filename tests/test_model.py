@@ -5,9 +5,9 @@ import math
 import numpy as np
 import pytest
 
-from rbhyst.deck import parse_deck
+from rbhyst.model.deck import parse_deck
 from rbhyst.errors import InputError
-from rbhyst.model import assemble, b_vector
+from rbhyst.model.system import assemble, b_vector
 from conftest import SEED_MASS, square_linear_deck
 
 

@@ -20,14 +20,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import rbhyst.outdir
-from rbhyst.calibration import protocol
+import rbhyst.files.outdir
+from rbhyst.analyses.calibration import protocol
 from rbhyst.cli import RECORD_MARK
-from rbhyst.deck import Loops, parse_deck
+from rbhyst.model.deck import Loops, parse_deck
 from rbhyst.errors import InputError
-from rbhyst.hysteresis import loop
-from rbhyst.outdir import MANIFEST, STAGING_PREFIX, read_manifest, staged_directory
-from rbhyst.records import read_table
+from rbhyst.model.vrm import loop
+from rbhyst.files.outdir import MANIFEST, STAGING_PREFIX, read_manifest, staged_directory
+from rbhyst.model.records import read_table
 from conftest import TABLE3_SHEAR, invoke, seed_deck, snapshot, square_linear_deck, write_deck
 
 
@@ -117,7 +117,7 @@ def test_an_interrupted_command_leaves_the_earlier_results(tmp_path, monkeypatch
     out = folder / "out"
     assert invoke(*args(folder, out))[0] == 0
     before = snapshot(folder)
-    real = rbhyst.outdir.staged_directory
+    real = rbhyst.files.outdir.staged_directory
 
     @contextmanager
     def interrupted(target):
@@ -126,7 +126,7 @@ def test_an_interrupted_command_leaves_the_earlier_results(tmp_path, monkeypatch
             assert {p.name for p in tmp.iterdir()} == outputs  # all written, none moved in yet
             raise KeyboardInterrupt
 
-    monkeypatch.setattr(rbhyst.outdir, "staged_directory", interrupted)
+    monkeypatch.setattr(rbhyst.files.outdir, "staged_directory", interrupted)
     code, _ = invoke(*args(folder, out))
     assert code == 130  # typer's exit status for KeyboardInterrupt
     assert snapshot(folder) == before and entries(folder) == set(before) | {"out"}
@@ -217,7 +217,7 @@ def test_make_record_writes_atomically_and_only_over_its_own_files(tmp_path, mon
     def interrupted(src, dst):
         raise KeyboardInterrupt
 
-    monkeypatch.setattr(rbhyst.outdir.os, "replace", interrupted)
+    monkeypatch.setattr(rbhyst.files.outdir.os, "replace", interrupted)
     assert invoke("make-record", out, *opts, "--seed", "8")[0] == 130
     assert invoke("make-record", tmp_path / "new" / "r.csv", *opts)[0] == 130
     monkeypatch.undo()
@@ -324,7 +324,7 @@ def test_a_signal_during_the_commit_waits_for_it(tmp_path, monkeypatch, capsys):
         raise KeyboardInterrupt
 
     target = tmp_path / "out"
-    monkeypatch.setattr(rbhyst.outdir.os, "replace", replace_then_signal)
+    monkeypatch.setattr(rbhyst.files.outdir.os, "replace", replace_then_signal)
     previous = signal.signal(signal.SIGTERM, interrupt)
     try:
         with pytest.raises(KeyboardInterrupt):

@@ -12,11 +12,11 @@ import scipy.linalg
 from typer.testing import CliRunner
 
 from rbhyst.cli import app
-from rbhyst.deck import parse_deck
+from rbhyst.model.deck import parse_deck
 from rbhyst.errors import InputError
-from rbhyst.geometry import composite, contains, polygon
-from rbhyst.model import assemble
-from rbhyst.simulate import Settings, simulate
+from rbhyst.model.geometry import composite, contains, polygon
+from rbhyst.model.system import assemble
+from rbhyst.solve.plan import Settings, simulate
 from conftest import SEED_MASS, SEED_VERTICES, seed_deck, square_linear_deck, write_deck
 
 # the README's cabinet: a uniform shell 0.8 m x 2.0 m and a dense unit 0.6 m x 0.4 m inside it

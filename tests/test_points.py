@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import rbhyst
-from rbhyst.deck import parse_deck
+from rbhyst.model.deck import parse_deck
 from rbhyst.errors import InputError
 from conftest import seed_deck, write_deck
 

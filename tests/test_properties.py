@@ -10,11 +10,12 @@ from hypothesis import HealthCheck, assume, given, settings, strategies as st
 from typer.testing import CliRunner
 
 from rbhyst.cli import app
-from rbhyst.deck import parse_deck
+from rbhyst.model.deck import parse_deck
 from rbhyst.errors import AnalysisError, InputError
-from rbhyst.hysteresis import loop, parameter_set
-from rbhyst.model import assemble
-from rbhyst.simulate import Settings, simulate
+from rbhyst.model.hysteresis import parameter_set
+from rbhyst.model.vrm import loop
+from rbhyst.model.system import assemble
+from rbhyst.solve.plan import Settings, simulate
 from conftest import ROOT, seed_deck, write_deck
 
 FAST = settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])

@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 
 from rbhyst.errors import InputError
-from rbhyst.records import read_at2, read_series, read_table
+from rbhyst.model.records import read_at2, read_series, read_table
 from conftest import DECKS, records_or_skip
 
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from rbhyst.history import Extremes, PlotData
+from rbhyst.solve.history import Extremes, PlotData
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])

@@ -8,12 +8,12 @@ import time
 import numpy as np
 import pytest
 
-from rbhyst.deck import load_deck, parse_deck
-from rbhyst.hysteresis import loop
-from rbhyst.integrators import reference
-from rbhyst.model import assemble
-from rbhyst.records import Series
-from rbhyst.simulate import Settings, settings_from_deck
+from rbhyst.model.deck import load_deck, parse_deck
+from rbhyst.model.vrm import loop
+from rbhyst.solve.integrators import reference
+from rbhyst.model.system import assemble
+from rbhyst.model.records import Series
+from rbhyst.solve.plan import Settings, settings_from_deck
 from conftest import DECKS, SEED_MASS, SEED_VERTICES, linear_set, seed_deck, write_deck
 
 K = 2.0e5

@@ -189,13 +189,13 @@ def sweep_folder(tmp_path_factory):
     x1 = {"file": "records/synthetic_x1.csv", "units": "g"}
     x2 = {"file": "records/synthetic_x2.csv", "units": "g"}
     sweep = {"deck": "deck.toml", "motions": [{"name": "syn", "x1": x1, "x2": x2}, {"name": "swapped", "x1": x2, "x2": x1}],
-             "scale": {"factors": [0.5, 1.0, 1.5, 2.0, 3.0]},
+             "scale": {"factors": [0.5, 1.5, 3.0]},
              "vary": {"body.mass": [700.0, 815.773]},
              "limit_states": [{"name": "at1", "quantity": "peak_at1_m_s2", "limit": 4.0},
                               {"name": "none", "quantity": "peak_u1_m", "limit": 1.0}],
              "fragility": {"bootstrap": 200}}
     (folder / "sweep.toml").write_text(tomli_w.dumps(sweep))
-    code, err = invoke("sweep", folder / "sweep.toml", "--workers", "2", "--report")
+    code, err = invoke("sweep", folder / "sweep.toml", "--workers", "1", "--report")
     assert code == 0, err
     return folder / "results" / "sweep"
 
@@ -205,7 +205,7 @@ def test_a_sweep_report_holds_its_statistics_and_fragility(sweep_folder):
     srcs = {a["data-src"].split(":")[0] for a, _ in page.numbers}
     assert {"sweep.json", "stats.csv", "fragility.csv", "cases.csv"} <= srcs
     text = " ".join(page.text)
-    assert "no case reaches the limit (0 of 10" in text  # a refused curve says why
+    assert "no case reaches the limit (0 of 6" in text  # a refused curve says why
     assert "fragility.png" in {i["data-file"] for i in page.images}
 
 

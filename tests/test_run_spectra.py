@@ -16,14 +16,14 @@ import pytest
 from typer.testing import CliRunner
 
 import rbhyst
-import rbhyst.simulate
+import rbhyst.solve.plan
 from rbhyst.cli import app
-from rbhyst.deck import parse_deck
+from rbhyst.model.deck import parse_deck
 from rbhyst.errors import InputError
 from rbhyst.response import response_spectrum
-from rbhyst.response.located import SPECTRA_COLUMNS, rest_samples
-from rbhyst.response.record import record_spectrum
-from rbhyst.synthetic import ground_motion
+from rbhyst.solve.located import SPECTRA_COLUMNS, rest_samples
+from rbhyst.analyses.record_spectrum import record_spectrum
+from rbhyst.model.synthetic import ground_motion
 from conftest import seed_deck, write_deck
 
 G = 9.80665
@@ -66,7 +66,7 @@ def test_streamed_in_small_chunks_and_every_change_nothing(record_deck, monkeypa
     folder, d, _ = record_deck
     path = write_deck(folder, d)
     whole = rbhyst.run(path, estimate=False).spectra
-    monkeypatch.setattr(rbhyst.simulate, "CHUNK_BYTES", 1)  # 64-row chunks
+    monkeypatch.setattr(rbhyst.solve.plan, "CHUNK_BYTES", 1)  # 64-row chunks
     d["output"]["every"] = 7
     res = rbhyst.run(write_deck(folder, d, name="every7"), out=folder / "out", plots=True, estimate=False)
     assert (folder / "out" / "spectra.png").stat().st_size > 0

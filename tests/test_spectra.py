@@ -11,7 +11,7 @@ from scipy.integrate import solve_ivp
 
 from rbhyst.errors import InputError
 from rbhyst.response import SpectrumAccumulator, default_periods, response_spectrum, step_coefficients
-from rbhyst.response.spectra import substep_counts
+from rbhyst.solve.spectra import substep_counts
 
 EPS = np.finfo(float).eps
 

@@ -7,10 +7,10 @@ import math
 import numpy as np
 import pytest
 
-from rbhyst.deck import parse_deck
+from rbhyst.model.deck import parse_deck
 from rbhyst.errors import AnalysisError
-from rbhyst.model import assemble
-from rbhyst.simulate import Settings, simulate
+from rbhyst.model.system import assemble
+from rbhyst.solve.plan import Settings, simulate
 from conftest import DECKS, linear_set, seed_deck, square_linear_deck
 
 EXPLICIT = ["chang", "central-difference"]

@@ -9,7 +9,7 @@ import json
 import pytest
 
 from rbhyst.sweep import load_sweep
-from rbhyst.sweep.store import FOLDER, HISTORIES, JOURNAL, line_sum
+from rbhyst.analyses.sweep.store import FOLDER, HISTORIES, JOURNAL, line_sum
 from conftest import invoke
 from test_sweep import basic, project, read_cases, write_sweep  # noqa: F401  (the fixture)
 

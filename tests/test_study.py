@@ -12,11 +12,10 @@ from typer.testing import CliRunner
 
 from rbhyst.cli import app
 
-from rbhyst.deck import parse_deck
-from rbhyst.model import assemble
-from rbhyst.simulate import Settings
-from rbhyst.study import (CSV_COLUMNS, Run, default_dts, fixed_step_names, observed_order, relative_errors,
-                          run_study, union_grid, write_csv)
+from rbhyst.model.deck import parse_deck
+from rbhyst.model.system import assemble
+from rbhyst.solve.plan import Settings
+from rbhyst.analyses.study import (CSV_COLUMNS, Run, default_dts, fixed_step_names, observed_order, relative_errors, run_study, union_grid, write_csv)
 from conftest import DECKS, seed_deck, square_linear_deck, write_deck
 
 runner = CliRunner()

@@ -22,10 +22,10 @@ import pytest
 import tomli_w
 import yaml
 
-from rbhyst.deck import ACCEL_UNITS
+from rbhyst.model.deck import ACCEL_UNITS
 from rbhyst.errors import InputError
 from rbhyst.sweep import load_sweep, run_sweep
-from rbhyst.sweep.store import FOLDER, JOURNAL
+from rbhyst.analyses.sweep.store import FOLDER, JOURNAL
 from conftest import DECKS, ROOT, invoke, records_or_skip, snapshot
 
 G = ACCEL_UNITS["g"]
@@ -107,7 +107,7 @@ def _toml(path: Path) -> dict:
 
 def test_a_worker_gives_what_rbhyst_run_gives(project):
     import rbhyst
-    from rbhyst.sweep.worker import flat_numbers, run_case, without_timings
+    from rbhyst.analyses.sweep.worker import flat_numbers, run_case, without_timings
 
     deck = rbhyst.load_deck(project / "seed_wri.toml")
     late = {"x1": {"type": "sine", "amplitude": 0.1, "frequency_hz": 2.0, "units": "g", "start": 3.0}}

@@ -10,11 +10,11 @@ import numpy as np
 import pytest
 from typer.testing import CliRunner
 
-import rbhyst.response.transmissibility as tr
+import rbhyst.analyses.transmissibility as tr
 from rbhyst.cli import app
-from rbhyst.deck import parse_deck
+from rbhyst.model.deck import parse_deck
 from rbhyst.errors import InputError
-from rbhyst.response.transmissibility import steady_state, stepped_sine
+from rbhyst.analyses.transmissibility import steady_state, stepped_sine
 from conftest import DECKS, square_linear_deck, write_deck
 
 K, MASS = 2.0e5, 500.0
@@ -43,7 +43,7 @@ def test_the_ramps_free_vibration_vanishes_at_these_ratios():
 
 
 def test_a_ramped_sine_rises_smoothly_then_is_the_sine():
-    from rbhyst.signals import ramp_envelope, sine
+    from rbhyst.model.signals import ramp_envelope, sine
 
     f, amp = 4.0, 2.5
     s, plain = sine(amp, f, start=0.1, ramp_cycles=3), sine(amp, f, start=0.1)

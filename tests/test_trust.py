@@ -12,11 +12,11 @@ from typer.testing import CliRunner
 
 import rbhyst
 from rbhyst.cli import app
-from rbhyst.deck import parse_deck
+from rbhyst.model.deck import parse_deck
 from rbhyst.errors import AnalysisError, InputError
-from rbhyst.model import assemble
-from rbhyst.settings import Settings
-from rbhyst.simulate import prepare, simulate
+from rbhyst.model.system import assemble
+from rbhyst.model.settings import Settings
+from rbhyst.solve.plan import prepare, simulate
 from conftest import linear_set, seed_deck, square_linear_deck, write_deck
 
 

@@ -1,1 +1,3 @@
-"""Analyses built on the cases of a sweep: fragility curves."""
+"""Layer 5, analyses: what is built on runs. The response spectrum of a record,
+transmissibility, the convergence study, calibration of hysteresis parameters, sweeps,
+fragility curves from a sweep's cases."""

@@ -491,16 +491,16 @@ def stripes_text(plan: FragilityPlan, found: list[Curve]) -> str:
 
 
 def write_fragility(plan: FragilityPlan, header: list[str], rows: list[list], folder: Path,
-                    plots: bool) -> list[Curve]:
-    """fragility.csv, fragility_stripes.csv and (with plots) fragility.png into ``folder``."""
+                    plotter=None) -> list[Curve]:
+    """fragility.csv, fragility_stripes.csv and, with a ``plotter`` (rbhyst.report.sweep, whose
+    ``plot_fragility`` draws it), fragility.png into ``folder``."""
     found = curves(plan, header, rows)
     folder = Path(folder)
     (folder / CSV_FILE).write_text(csv_text(plan, found), encoding="utf-8")
     (folder / STRIPES_FILE).write_text(stripes_text(plan, found), encoding="utf-8")
-    if plots:
-        from ..report.fragility import plot_fragility
-
-        plot_fragility(found, plan.intensity.label, plan.vary_keys, folder / PLOT_FILE, plan.options.confidence)
+    if plotter is not None:
+        plotter.plot_fragility(found, plan.intensity.label, plan.vary_keys, folder / PLOT_FILE,
+                               plan.options.confidence)
     return found
 
 
@@ -529,8 +529,8 @@ def plan_fragility(sweep) -> FragilityPlan | None:
     """The sweep's limit states checked against the columns its cases will have, and each case's
     intensity measure; None without limit states. InputError (one line per problem, naming the
     sweep file's key) before anything runs."""
-    from ..errors import InputError
-    from ..sweep.spec import FragilityOptions
+    from rbhyst.errors import InputError
+    from rbhyst.analyses.sweep.spec import FragilityOptions
 
     spec = sweep.spec
     if not spec.limit_states:
@@ -573,9 +573,9 @@ def _systems(sweep, per_motion: bool) -> dict[int, tuple]:
     """The assembled deck of the first case of each vary combination (and of each motion, where
     the intensity is the motion's): {case number: (case, System, points)}; a case whose deck
     cannot be assembled (a record that cannot be read) is left out, as it fails when it runs."""
-    from ..errors import InputError
-    from ..model import assemble
-    from ..settings import settings_from_deck
+    from rbhyst.errors import InputError
+    from rbhyst.model.system import assemble
+    from rbhyst.model.settings import settings_from_deck
 
     chosen: dict[int, object] = {}
     seen_m, seen_v = set(), set()
@@ -597,7 +597,7 @@ def _systems(sweep, per_motion: bool) -> dict[int, tuple]:
 
 
 def _columns(system, points) -> list[str]:
-    from ..history import Layout
+    from rbhyst.solve.history import Layout
 
     names = [f"peak_{n}" for n in Layout(system, points).names if n != "time_s"]
     k = 1
@@ -611,8 +611,8 @@ def _columns(system, points) -> list[str]:
 def _intensity(sweep, options, systems) -> Intensity:
     """Each case's intensity measure: the scale level as written, the PGA of its motion as scaled
     (the larger component's, as [scale] pga_g takes it), or Sa of that motion at period_s."""
-    from ..deck import ACCEL_UNITS
-    from ..errors import InputError
+    from rbhyst.model.deck import ACCEL_UNITS
+    from rbhyst.errors import InputError
 
     g = ACCEL_UNITS["g"]
     kind = options.intensity
@@ -630,11 +630,11 @@ def _intensity(sweep, options, systems) -> Intensity:
             raise InputError(f"fragility.intensity: motion {c.motion} has no support acceleration to take "
                              f"{'a PGA' if kind == 'pga_g' else 'an Sa'} of; use intensity = \"scale\"")
         if kind == "pga_g":
-            from ..sweep.motions import peak_acceleration
+            from rbhyst.analyses.sweep.motions import peak_acceleration
 
             support = c.values.get("excitation.support") or (c.values.get("excitation") or {}).get("support")
             if support is None:
-                from ..sweep.motions import deck_support
+                from rbhyst.analyses.sweep.motions import deck_support
 
                 support = deck_support(sweep.base.deck())
             value = peak_acceleration(support) / g
@@ -654,7 +654,7 @@ def _intensity(sweep, options, systems) -> Intensity:
 def _sa(system, period: float, damping: float) -> float:
     """Sa (m/s2) of the support motion at one period: the larger component's, over the whole
     motion followed by rest for one period (the oscillator peaks within half of one after it)."""
-    from ..response.ground import ground_spectra
+    from rbhyst.solve.ground import ground_spectra
 
     ex = system.excitation
     end = ex.duration

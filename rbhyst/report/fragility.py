@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ._style import save, styled, subplots
+from rbhyst.report._style import save, styled, subplots
 
 MAX_GROUPS = 8  # vary combinations drawn per panel
 
@@ -32,7 +32,7 @@ def plot_fragility(curves, label: str, vary_keys: list[str], path: Path, confide
             group = ", ".join(f"{k} = {v}" for k, v in zip(vary_keys, c.group)) if several else ""
             keep = c.n > 0
             if c.fitted:
-                from ..analyses.fragility import probability
+                from rbhyst.analyses.fragility import probability
 
                 if c.band is not None:
                     ax.fill_between(c.grid, *c.band, color=colour, alpha=0.18, lw=0,

@@ -14,8 +14,8 @@ import html
 import json
 from pathlib import Path
 
-from .. import __version__
-from ..errors import InputError
+from rbhyst._version import __version__
+from rbhyst.errors import InputError
 
 REPORT_FILE = "report.html"
 G = 9.80665  # m/s2 (a g column beside m/s2 only; every value in m/s2 is summary.json's)
@@ -210,7 +210,7 @@ def _toml_table(data: dict, path: tuple, lines: list[str]) -> None:
 def write_report(folder: str | Path) -> Path:
     """Write report.html into a results folder of ``rbhyst run`` or ``rbhyst sweep`` and list it
     in the folder's manifest beside the files already there (which stay)."""
-    from ..outdir import read_manifest, staged_directory
+    from rbhyst.files.outdir import read_manifest, staged_directory
 
     folder = Path(folder)
     if not folder.is_dir():
@@ -231,7 +231,7 @@ def write_report(folder: str | Path) -> Path:
 def check_report_target(folder: str | Path) -> None:
     """Before a run or a sweep with --report: a report.html there is rbhyst's or absent (the
     command stops before it runs, as it would for its own files)."""
-    from ..outdir import MANIFEST, read_manifest
+    from rbhyst.files.outdir import MANIFEST, read_manifest
 
     folder = Path(folder)
     path = folder / REPORT_FILE

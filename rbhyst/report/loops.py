@@ -7,9 +7,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..calibration import LoopResult
-from ..hysteresis import limiting_curve
-from ._style import save, styled, subplots
+from rbhyst.analyses.calibration import LoopResult
+from rbhyst.model.hysteresis import limiting_curve
+from rbhyst.report._style import save, styled, subplots
 
 
 def _display_units(u_max: float, f_max: float) -> tuple[str, float, str, float]:
@@ -42,7 +42,7 @@ def plot_loops(results: list[LoopResult], path: Path, title: str | None = None,
         if res.f_data is not None:
             ax.plot(res.u * u_fac, res.f_data * f_fac, color="0.15", lw=0.8, alpha=0.8, label="test data")
         if initial is not None and res.name in initial:
-            from ..hysteresis import loop
+            from rbhyst.model.vrm import loop
 
             try:
                 f0 = loop(initial[res.name], res.u)[0]

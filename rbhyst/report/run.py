@@ -7,8 +7,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..results import Result
-from ._style import TIME_MARGINS, save, styled, subplots
+from rbhyst.solve.result import Result
+from rbhyst.report._style import TIME_MARGINS, save, styled, subplots
 
 
 def _draw_outline(ax, v: np.ndarray, fill_alpha: float, labels: list[str]) -> None:
@@ -185,7 +185,7 @@ def write_plots(result: Result, out: Path) -> list[str]:
     the file names written."""
     from functools import partial
 
-    from .parallel import draw_all
+    from rbhyst.report.parallel import draw_all
 
     jobs = {"model.png": partial(plot_body, result, out / "model.png")}
     if result.layout.has_support:
@@ -196,7 +196,7 @@ def write_plots(result: Result, out: Path) -> list[str]:
         jobs[f"response_{name}.png"] = partial(plot_point, result, name, out / f"response_{name}.png")
     jobs["element_loops.png"] = partial(plot_element_loops, result, out / "element_loops.png")
     if result.spectra is not None:
-        from .spectra import plot_spectra
+        from rbhyst.report.spectra import plot_spectra
 
         jobs["spectra.png"] = partial(plot_spectra, result.spectra, out / "spectra.png", title=result.system.title)
     jobs["energy.png"] = partial(plot_energy, result, out / "energy.png")

@@ -6,8 +6,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..response.located import CENTRE, GROUND, LocatedSpectra
-from ._style import save, styled, subplots
+from rbhyst.solve.located import CENTRE, GROUND, LocatedSpectra
+from rbhyst.report._style import save, styled, subplots
 
 G_STANDARD = 9.80665
 #: one line style per damping ratio, in the deck's order

@@ -8,8 +8,8 @@ from pathlib import Path
 import numpy as np
 from matplotlib.ticker import NullFormatter
 
-from ..study import Run, Study
-from ._style import save, styled, subplots
+from rbhyst.analyses.study import Run, Study
+from rbhyst.report._style import save, styled, subplots
 
 MARKERS = ("o", "s", "^", "D", "v", "P", "X", "*")
 

@@ -17,8 +17,9 @@ from pathlib import Path
 import numpy as np
 from matplotlib.ticker import MaxNLocator
 
-from ..sweep.tables import PERCENTILE
-from ._style import save, styled, subplots
+from rbhyst.analyses.sweep.tables import PERCENTILE
+from rbhyst.report._style import save, styled, subplots
+from rbhyst.report.fragility import plot_fragility  # noqa: F401 (the sweep's plotter draws fragility.png too)
 
 PLOT_FILES = ("ida.png", "vary.png", "motions.png")
 #: the peaks drawn, where the cases have them (every peak is in cases.csv and stats.csv)

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ._style import save, styled, subplots
+from rbhyst.report._style import save, styled, subplots
 
 G_STANDARD = 9.80665
 #: a cross response below this is not drawn (a symmetric body's is rounding: 1e-17)

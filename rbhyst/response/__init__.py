@@ -1,4 +1,6 @@
-"""Responses derived from acceleration histories: spectra of linear oscillators.
+"""Top layer: the documented import paths of response spectra (``rbhyst.response``,
+``rbhyst.response.record``, ``.transmissibility``, ``.ground``), kept for scripts; the code
+lives in :mod:`rbhyst.solve.spectra` and :mod:`rbhyst.analyses`.
 
 The names below are loaded on first use (PEP 562), so that a run which asks for no spectra
 never imports their compiled kernels (and with them numba).
@@ -13,7 +15,7 @@ __all__ = ["Spectrum", "SpectrumAccumulator", "default_periods", "response_spect
 
 def __getattr__(name: str):
     if name in __all__:
-        return getattr(importlib.import_module(".spectra", __name__), name)
+        return getattr(importlib.import_module("rbhyst.solve.spectra"), name)
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 

@@ -1,18 +1,23 @@
-"""Sweeps: one base deck run over a suite of motions, intensity levels and deck values.
+"""Top layer: ``rbhyst.sweep``, the documented path of :mod:`rbhyst.analyses.sweep`, with the
+plots of :mod:`rbhyst.report.sweep`.
 
     from rbhyst.sweep import load_sweep, run_sweep
-    sweep = load_sweep("decks/suite.toml")      # every case built and checked (InputError)
-    outcome = run_sweep(sweep, workers=2)       # or scheduler="tcp://host:8786"
-    header, rows = outcome.table()              # cases.csv
-
-- :mod:`.spec`: the sweep file (pydantic models); :mod:`.motions`: motions listed, found in
-  folders, scaled; :mod:`.cases`: the cases and their keys;
-- :mod:`.worker`: what a worker process runs; :mod:`.backends`: local processes or Dask;
-- :mod:`.store`: the finished cases kept in the output folder; :mod:`.tables`: cases.csv and
-  stats.csv; :mod:`.histories`: histories.parquet; :mod:`.runner`: run_sweep.
 """
 
-from .cases import Case, Sweep, load_sweep
-from .runner import Outcome, SweepIncomplete, run_sweep
+from __future__ import annotations
+
+from rbhyst.analyses.sweep import Case, Outcome, Sweep, SweepIncomplete, load_sweep
+from rbhyst.analyses.sweep import run_sweep as _run_sweep
 
 __all__ = ["Case", "Outcome", "Sweep", "SweepIncomplete", "load_sweep", "run_sweep"]
+
+
+def run_sweep(sweep: Sweep, *args, plots: bool = True, **kwargs) -> Outcome:
+    """:func:`rbhyst.analyses.sweep.runner.run_sweep` with its plots drawn by rbhyst.report.sweep."""
+    plotter = None
+    if plots:
+        from rbhyst.report import sweep as plotter
+    return _run_sweep(sweep, *args, plots=plots, plotter=plotter, **kwargs)
+
+
+

@@ -1,0 +1,3 @@
+"""rbhyst's version (base layer: imports nothing)."""
+
+__version__ = "0.2.0"

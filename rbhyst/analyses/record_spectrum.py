@@ -1,0 +1,73 @@
+"""The response spectrum of a support acceleration record alone (``rbhyst spectrum``)."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+
+from rbhyst.errors import InputError
+from rbhyst.solve.located import GROUND, LocatedSpectra, SpectraSink, rest_samples
+from rbhyst.solve.spectra import default_periods
+
+#: what the record readers say of the deck, said of the command's options instead
+_OPTION_WORDS = (("one column of values needs `dt` in the deck", "one column of values needs --dt"),
+                 ("has a time column; leave `dt` out of the deck", "has a time column; leave --dt out"),
+                 ("but the deck says units =", "but --units says"))
+
+
+def check_oscillators(dampings, periods) -> list[str]:
+    """Problems with --damping and --periods, one line each."""
+    problems = [f"--damping: {z:g} must be at least 0 and below 1" for z in dampings if not 0.0 <= z < 1.0]
+    problems += [f"--periods: {t:g} s must be positive" for t in periods or () if not (t > 0 and math.isfinite(t))]
+    if len(set(dampings)) != len(dampings):
+        problems.append("--damping: each damping once")
+    if periods is not None and len(set(periods)) != len(periods):
+        problems.append("--periods: each period once")
+    if not dampings:
+        problems.append("--damping: at least one damping ratio")
+    if periods is not None and not periods:
+        problems.append("--periods: at least one period (s)")
+    return problems
+
+
+def record_spectrum(path: Path, units: str, dt: float | None = None, dampings=(0.05,), periods=None,
+                    direction: str = "x1", free_vibration: bool = True) -> LocatedSpectra:
+    """Spectra of the record at ``path`` in ``units`` (held to what the file declares).
+
+    free_vibration: follow the record with rest until every oscillator has passed its peak
+    (rest_samples: exact, as the ground is at rest after the record); otherwise peaks over
+    the record's samples only.
+    """
+    from rbhyst.model.deck import ACCEL_UNITS
+    from rbhyst.files.units import check_declared
+    from rbhyst.model.records import read_record
+
+    problems = check_oscillators(list(dampings), None if periods is None else list(periods))
+    if units not in ACCEL_UNITS:
+        problems.append(f"--units: {units!r} is not an acceleration unit rbhyst knows; "
+                        f"choose one of {', '.join(ACCEL_UNITS)}")
+    if dt is not None and not (dt > 0 and math.isfinite(dt)):
+        problems.append(f"--dt: {dt:g} s must be positive")
+    if direction not in ("x1", "x2"):
+        problems.append(f"--direction: {direction!r}: x1 or x2")
+    if problems:
+        raise InputError(problems)
+    try:
+        rec = read_record(Path(path), dt)
+        check_declared(rec.declared, units)
+    except InputError as err:
+        lines = []
+        for p in err.problems:
+            for deck_words, option_words in _OPTION_WORDS:
+                p = p.replace(deck_words, option_words)
+            lines.append(p)
+        raise InputError(lines) from None
+    acc = rec.series.values * ACCEL_UNITS[units]
+    periods = np.sort(np.asarray(periods, float)) if periods is not None else default_periods()
+    sink = SpectraSink([(GROUND, direction)], dampings, periods, rec.series.dt)
+    sink.update(acc[:, None])
+    if free_vibration:
+        sink.update(np.zeros((rest_samples(periods, dampings, rec.series.dt), 1)))
+    return sink.result()

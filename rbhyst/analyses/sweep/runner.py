@@ -1,0 +1,341 @@
+"""run_sweep: the cases a results folder does not hold yet, in batches on local workers or a
+Dask cluster, each batch kept as it comes back; then cases.csv, stats.csv, sweep.json, plots
+and (optionally) histories.parquet, written together under the rules of rbhyst.files.outdir."""
+
+from __future__ import annotations
+
+import json
+import math
+import time
+from collections import deque
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable
+
+from rbhyst._version import __version__
+from rbhyst.errors import DiskFull, InputError
+from rbhyst.files.outdir import MANIFEST, read_manifest, staged_directory
+from rbhyst.analyses.sweep.backends import WorkerLost
+from rbhyst.analyses.sweep.cases import Sweep
+from rbhyst.analyses.sweep.store import Journal
+from rbhyst.analyses.sweep.tables import PERCENTILE, cases_table, stats_table, to_csv
+
+#: the files a sweep writes into its folder (beside its own .rbhyst-sweep/)
+CASES_CSV, STATS_CSV, SWEEP_JSON, HISTORIES_FILE = "cases.csv", "stats.csv", "sweep.json", "histories.parquet"
+#: a batch is sized to take about this long on a worker (once a case's cost is known)
+BATCH_S = 0.5
+
+
+class SweepIncomplete(Exception):
+    """Some cases could not be computed (a worker or the cluster lost); the rest are kept."""
+
+    def __init__(self, message: str, outcome: "Outcome"):
+        super().__init__(message)
+        self.outcome = outcome
+
+
+@dataclass
+class Outcome:
+    """What a sweep did: the results by key, and how long it took."""
+
+    sweep: Sweep
+    out: Path
+    results: dict[str, dict] = field(default_factory=dict)
+    computed: int = 0  # cases run by this call
+    reused: int = 0  # cases the folder held already
+    missing: list[str] = field(default_factory=list)  # keys lost with a worker
+    missing_reason: str = ""
+    notes: list[str] = field(default_factory=list)  # said before the cases run
+    where: str = ""
+    t_start: float = 0.0
+    t_first: float | None = None  # when the first batch came back (a worker started and ran it)
+    t_end: float = 0.0
+    n_first: int = 0  # cases in that batch
+    elapsed_s: list[float] = field(default_factory=list)  # per computed case, in its worker
+    wall_s: list[float] = field(default_factory=list)  # per computed case: analysis.wall_s
+
+    @property
+    def failed(self) -> int:
+        return sum(1 for c in self.sweep.cases if c.problem or self.results.get(c.key, {}).get("status") == "failed")
+
+    @property
+    def ok(self) -> int:
+        return sum(1 for c in self.sweep.cases if not c.problem and self.results.get(c.key, {}).get("status") == "ok")
+
+    def table(self) -> tuple[list[str], list[list]]:
+        """cases.csv's header and rows."""
+        return cases_table(self.sweep.cases, self.sweep.vary_keys, self.results)
+
+
+Progress = Callable[[int, int, int], None]  # (cases done, of which failed, cases to compute)
+
+
+def final_files(save_histories: bool, plotter=None, fragility: bool = False) -> list[str]:
+    names = [CASES_CSV, STATS_CSV, SWEEP_JSON]
+    if save_histories:
+        names.append(HISTORIES_FILE)
+    if plotter is not None:
+        names.extend(plotter.PLOT_FILES)
+    if fragility:
+        from rbhyst.analyses.fragility import files
+
+        names.extend(files(plotter is not None))
+    return names
+
+
+def check_out(out: Path, names: list[str]) -> None:
+    """Before anything runs: the folder's files rbhyst would write are rbhyst's or absent."""
+    if out.exists() and not out.is_dir():
+        raise InputError(f"{out}: exists and is not a folder; choose another output folder")
+    if not out.exists():
+        return
+    owned = read_manifest(out)
+    problems = [f"{out}: {n} exists and rbhyst did not write it (not listed in {MANIFEST}); rbhyst will not "
+                "overwrite it: move it away or choose another output folder"
+                for n in names if ((out / n).exists() or (out / n).is_symlink()) and n not in owned.files]
+    if problems:
+        raise InputError(problems)
+
+
+def run_sweep(sweep: Sweep, out: str | Path | None = None, workers: int | None = None,
+              scheduler: str | None = None, fresh: bool = False, save_histories: bool = False,
+              plots: bool = True, progress: Progress | None = None,
+              started: Callable[["Outcome", int], None] | None = None, plotter=None) -> Outcome:
+    """Compute what ``out`` (default results/<sweep stem>/ beside the sweep file) does not hold
+    yet and write the sweep's files. Raises SweepIncomplete when cases were lost with a worker
+    or the cluster (what finished is kept: the same call computes the rest).
+
+    ``started(outcome, n)`` is called once the folder is checked and the workers are ready
+    to compute ``n`` cases (0: the folder holds them all); ``progress(done, failed, n)`` as
+    batches come back. ``plots`` are drawn by ``plotter`` (``PLOT_FILES``, ``write_plots``:
+    rbhyst.report.sweep, which rbhyst.sweep.run_sweep gives)."""
+    if plots and plotter is None:
+        raise TypeError("plots need a plotter (rbhyst.report.sweep): call rbhyst.sweep.run_sweep")
+    plotter = plotter if plots else None
+    from rbhyst.analyses.sweep.backends import DaskCluster, LocalPool, default_workers
+
+    out = Path(out) if out is not None else sweep.default_out()
+    if workers is not None and workers < 1:
+        raise InputError(f"--workers: {workers} must be at least 1")
+    if workers is not None and scheduler is not None:
+        raise InputError("--workers: not with --scheduler (the cluster's workers run the cases)")
+    if save_histories:
+        from rbhyst.analyses.sweep.histories import require_pyarrow
+
+        require_pyarrow()
+    check_out(out, final_files(save_histories, plotter, sweep.fragility is not None))
+    journal = Journal(out, fresh=fresh)
+    outcome = Outcome(sweep, out, t_start=time.perf_counter())
+    todo: dict[str, dict] = {}
+    untrusted = {d.key: d.why for d in journal.damaged}
+    for c in sweep.cases:
+        if c.problem is not None or c.key in todo:
+            continue
+        e = journal.entries.get(c.key)
+        if e is not None and save_histories and e.get("status") == "ok":
+            why = journal.history_problem(c.key)
+            if why not in (None, "not kept"):
+                untrusted[c.key] = why
+            if why is not None:
+                e = None
+        if e is not None:
+            outcome.results[c.key] = e
+        else:
+            todo[c.key] = c.values
+    outcome.notes.extend(damage_notes(sweep, untrusted))
+    outcome.reused = sum(1 for c in sweep.cases if c.key in outcome.results)
+    try:
+        journal.open()
+        if not todo and started:
+            started(outcome, 0)
+        if todo:
+            if scheduler is not None:
+                backend = DaskCluster(scheduler, sweep.base, save_histories)
+            else:
+                backend = LocalPool(min(workers or default_workers(), len(todo)), sweep.base, save_histories)
+            outcome.where = backend.where
+            if started:
+                started(outcome, len(todo))
+            _compute(backend, list(todo.items()), journal, outcome, save_histories, progress)
+        outcome.t_end = time.perf_counter()
+        if outcome.missing:
+            n = len(outcome.missing)
+            raise SweepIncomplete(f"{n} case{'s' * (n != 1)} could not be computed ({outcome.where}: "
+                                  f"{outcome.missing_reason}); the {len(outcome.results)} finished are kept in "
+                                  f"{journal.folder}: the same command computes the rest", outcome)
+        _write(outcome, journal, save_histories, plotter)
+    finally:
+        journal.close()
+    return outcome
+
+
+def _compute(backend, todo: list[tuple[str, dict]], journal: Journal, outcome: Outcome,
+             save_histories: bool, progress: Progress | None) -> None:
+    queue = deque(todo)
+    inflight: dict[object, list[tuple[str, dict]]] = {}
+    done = failed = 0
+    per_case: float | None = None  # seconds a case takes in a worker
+    killed = False
+    if progress:
+        progress(0, 0, len(todo))
+    try:
+        while queue or inflight:
+            while queue and len(inflight) < backend.slots:
+                n = batch_size(len(queue), backend.workers, per_case)
+                batch = [queue.popleft() for _ in range(n)]
+                f = backend.submit(batch)
+                inflight[f] = batch
+            try:
+                finished = backend.wait(inflight, 0.2)
+            except WorkerLost as err:
+                outcome.missing_reason = str(err)
+                outcome.missing.extend(k for b in inflight.values() for k, _ in b)
+                outcome.missing.extend(k for k, _ in queue)
+                return
+            for f in finished:
+                batch = inflight.pop(f)
+                try:
+                    results = backend.result(f)
+                except WorkerLost as err:
+                    action = backend.recover()
+                    outcome.missing_reason = str(err)
+                    if action == "requeue":  # the pool is new: every batch in flight runs again
+                        for b in [batch, *inflight.values()]:
+                            queue.extendleft(reversed(b))
+                        inflight.clear()
+                        break
+                    if action == "drop":
+                        outcome.missing.extend(k for k, _ in batch)
+                        continue
+                    outcome.missing.extend(k for b in [batch, *inflight.values()] for k, _ in b)
+                    outcome.missing.extend(k for k, _ in queue)
+                    inflight.clear()
+                    queue.clear()
+                    return
+                _keep(results, journal, outcome, save_histories)
+                if outcome.t_first is None:
+                    outcome.t_first = time.perf_counter()
+                    outcome.n_first = len(batch)
+                done += len(results)
+                failed += sum(r["status"] != "ok" for r in results)
+                costs = [r["elapsed_s"] for r in results if "elapsed_s" in r]
+                outcome.elapsed_s.extend(costs)
+                outcome.wall_s.extend(r["wall_s"] for r in results if "wall_s" in r)
+                if outcome.elapsed_s:
+                    per_case = sum(outcome.elapsed_s[-200:]) / len(outcome.elapsed_s[-200:])
+                if progress:
+                    progress(done, failed, len(todo))
+    except BaseException:  # Ctrl-C, SIGTERM, a bug: end the workers now, keep what is written
+        killed = True
+        backend.close(kill=True, pending=list(inflight))
+        raise
+    finally:
+        if not killed:
+            backend.close()
+
+
+def damage_notes(sweep: Sweep, untrusted: dict[str | None, str], shown: int = 5) -> list[str]:
+    """One line naming the stored cases that could not be trusted (they are computed again),
+    by their numbers in cases.csv and why; damaged lines of cases no longer in the sweep are
+    counted only."""
+    numbers = {c.key: c.number for c in sweep.cases}
+    named = sorted((numbers[k], why) for k, why in untrusted.items() if k in numbers)
+    other = sum(1 for k in untrusted if k not in numbers)
+    if not named and not other:
+        return []
+    parts = [f"case {n} ({why})" for n, why in named[:shown]]
+    if len(named) > shown:
+        parts.append(f"{len(named) - shown} more")
+    if other:
+        parts.append(f"{other} damaged line{'s' * (other != 1)} of no case of this sweep (set aside)")
+    n = len(named)
+    return [f"the store could not vouch for {n} finished case{'s' * (n != 1)}, computed again: " + "; ".join(parts)
+            if n else f"the store had {'; '.join(parts)}"]
+
+
+def batch_size(remaining: int, workers: int, per_case: float | None) -> int:
+    """Guided batches: a third of each worker's share of what remains, so that batches shrink
+    towards the end and no worker waits long for the last one; at most about BATCH_S of work
+    (2 cases until a case's cost is known), so that progress shows and an interrupt loses little."""
+    n = math.ceil(remaining / (3 * workers))
+    cap = 2 if per_case is None else max(1, int(BATCH_S / max(per_case, 1e-6)))
+    return max(1, min(n, cap, remaining))
+
+
+def _keep(results: list[dict], journal: Journal, outcome: Outcome, save_histories: bool) -> None:
+    """Write a batch's cases into the journal (and their histories beside it); internal errors
+    are reported but not kept, so that the next run tries them again."""
+    histories = [(r["key"], r.pop("history")) for r in results if "history" in r]
+    if save_histories and histories:
+        from rbhyst.analyses.sweep.histories import write_part
+
+        name, tmp = journal.new_history_file()
+        with journal.space(tmp):
+            write_part(tmp, journal.history_path(name), histories)
+        digest = journal.sum_of_history(name)
+        for r in results:
+            if r["status"] == "ok":
+                r["history"], r["history_sha256"] = name, digest
+    keep = [r for r in results if not r.get("internal")]
+    if keep:
+        journal.add(keep)
+    for r in results:
+        outcome.results[r["key"]] = r
+    outcome.computed += len(results)
+
+
+def _write(outcome: Outcome, journal: Journal, save_histories: bool, plotter) -> None:
+    try:
+        _write_files(outcome, journal, save_histories, plotter)
+    except DiskFull as err:
+        n = len(outcome.results)
+        raise DiskFull(err.folder, err.free, "the sweep's tables" + " and plots" * (plotter is not None),
+                       f"its {n} case{'s are' if n != 1 else ' is'} kept in {journal.folder}: the same command "
+                       "writes them once there is space") from None
+
+
+def _write_files(outcome: Outcome, journal: Journal, save_histories: bool, plotter) -> None:
+    sweep = outcome.sweep
+    header, rows = outcome.table()
+    s_header, s_rows = stats_table(sweep.cases, sweep.vary_keys, outcome.results)
+    with staged_directory(outcome.out) as tmp:
+        (tmp / CASES_CSV).write_text(to_csv(header, rows), encoding="utf-8")
+        (tmp / STATS_CSV).write_text(to_csv(s_header, s_rows), encoding="utf-8")
+        (tmp / SWEEP_JSON).write_text(json.dumps(_about(outcome), indent=2) + "\n", encoding="utf-8")
+        if save_histories:
+            from rbhyst.analyses.sweep.histories import assemble
+
+            parts = {c.key: journal.history_path(outcome.results[c.key]["history"]) for c in sweep.cases
+                     if c.key in outcome.results and outcome.results[c.key].get("history")}
+            assemble(tmp / HISTORIES_FILE, sweep.cases, parts)
+        if plotter is not None:
+            plotter.write_plots(header, rows, sweep.vary_keys, sweep.scale_kind, tmp)
+        if sweep.fragility is not None:
+            from rbhyst.analyses.fragility import write_fragility
+
+            write_fragility(sweep.fragility, header, rows, tmp, plotter)
+
+
+def _about(outcome: Outcome) -> dict:
+    sweep = outcome.sweep
+    return {
+        "rbhyst_version": __version__,
+        "sweep": sweep.path.name,
+        "deck": sweep.spec.deck,
+        "cases": len(sweep.cases),
+        "ok": outcome.ok,
+        "failed": outcome.failed,
+        "computed": outcome.computed,
+        "reused": outcome.reused,
+        "where": outcome.where or None,
+        "wall_s": outcome.t_end - outcome.t_start,
+        "motions": sweep.motions,
+        "scale": {"kind": sweep.scale_kind, "levels": sweep.levels},
+        "vary": sweep.vary_keys,
+        "statistics": f"stats.csv over the motions of each scale level and vary combination: mean, median "
+                      f"and p84 = numpy.percentile(x, {PERCENTILE:g}) (linear interpolation between order "
+                      f"statistics), max",
+        **({"fragility": sweep.fragility.about()} if sweep.fragility is not None else {}),
+        "case_key": "sha256 of the case's validated deck (without title, output.directory, output.plots), "
+                    "each record file replaced by the sha256 of its bytes, and the rbhyst version",
+    }

@@ -1,0 +1,114 @@
+"""cases.csv and stats.csv from the cases and their results: pure functions.
+
+Numbers are written exactly (Python's shortest repr, which reads back to the same double);
+an empty cell is a value the case does not have (a failed run's peaks, a vary key another
+listed case sets).
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+from collections.abc import Iterable
+
+import numpy as np
+
+from rbhyst.analyses.sweep.cases import Case, format_value
+
+#: the percentile stats.csv reports beside the median, by numpy's default (linear) rule
+PERCENTILE = 84.0
+#: the groups of a case's numbers and the prefix of their columns, in cases.csv's order
+_PREFIX = {"peaks": "peak_", "stroke": "stroke_", "energy": "energy_", "accuracy": "accuracy_"}
+
+
+def result_columns(entries: Iterable[dict | None]) -> list[str]:
+    """peak_<column> for every peak of every result, then stroke_e<k> (the stroke utilization of
+    each element with a stroke), energy_<key>, accuracy_<key>, each in the order first met (a
+    scene with more elements adds its columns)."""
+    groups: dict[str, dict[str, None]] = {g: {} for g in _PREFIX}
+    for e in entries:
+        if e and e.get("status") == "ok":
+            for g, names in groups.items():
+                names.update(dict.fromkeys(e.get(g) or {}))
+    prefix = _PREFIX
+    return [prefix[g] + n for g, names in groups.items() for n in names]
+
+
+def result_values(entry: dict | None, columns: list[str]) -> dict[str, float | None]:
+    """The entry's numbers under the column names of :func:`result_columns`."""
+    out: dict[str, float | None] = {}
+    flat = {}
+    if entry and entry.get("status") == "ok":
+        for g, prefix in _PREFIX.items():
+            flat.update({prefix + k: v for k, v in (entry.get(g) or {}).items()})
+    for c in columns:
+        out[c] = flat.get(c)
+    return out
+
+
+def case_status(case: Case, entry: dict | None) -> tuple[str, str]:
+    if case.problem is not None:
+        return "failed", case.problem
+    if entry is None:
+        return "missing", "not computed"
+    return entry["status"], entry.get("message") or ""
+
+
+def cases_table(cases: list[Case], vary_keys: list[str], results: dict[str, dict]) -> tuple[list[str], list[list]]:
+    """cases.csv: header and rows (one per case, in the sweep's order)."""
+    entries = [None if c.problem else results.get(c.key) for c in cases]
+    columns = result_columns(entries)
+    header = ["case", "motion", "scale", *vary_keys, "status", "message", *columns]
+    rows = []
+    for c, e in zip(cases, entries):
+        status, message = case_status(c, e)
+        values = result_values(e, columns)
+        rows.append([c.number, c.motion, _num(c.scale),
+                     *[format_value(c.vary[k]) if k in c.vary else "" for k in vary_keys],
+                     status, message, *[_num(values[k]) for k in columns]])
+    return header, rows
+
+
+def stats_table(cases: list[Case], vary_keys: list[str], results: dict[str, dict]) -> tuple[list[str], list[list]]:
+    """stats.csv: for each scale level and vary combination, over its motions, the count of
+    finished runs, the failed ones, and mean, median, 84th percentile (numpy's linear
+    interpolation between order statistics) and max of every peak."""
+    entries = {c.key: (None if c.problem else results.get(c.key)) for c in cases}
+    peaks = [c for c in result_columns(entries.values()) if c.startswith("peak_")]
+    groups: dict[tuple, list[Case]] = {}
+    for c in cases:
+        ident = (c.scale, tuple(format_value(c.vary[k]) if k in c.vary else "" for k in vary_keys))
+        groups.setdefault(ident, []).append(c)
+    header = ["scale", *vary_keys, "peak", "count", "failed", "mean", "median", "p84", "max"]
+    rows = []
+    for (level, vary), members in groups.items():
+        statuses = [case_status(c, entries[c.key])[0] for c in members]
+        failed = statuses.count("failed")
+        values = [result_values(entries[c.key], peaks) for c, s in zip(members, statuses) if s == "ok"]
+        for p in peaks:
+            x = np.array([v[p] for v in values if v[p] is not None], dtype=float)
+            s = peak_stats(x)
+            rows.append([_num(level), *vary, p, len(x), failed,
+                         *[_num(s[k]) for k in ("mean", "median", "p84", "max")]])
+    return header, rows
+
+
+def peak_stats(x: np.ndarray) -> dict[str, float | None]:
+    if len(x) == 0:
+        return dict.fromkeys(("mean", "median", "p84", "max"))
+    return {"mean": float(np.mean(x)), "median": float(np.median(x)),
+            "p84": float(np.percentile(x, PERCENTILE)), "max": float(np.max(x))}
+
+
+def to_csv(header: list[str], rows: list[list]) -> str:
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(header)
+    w.writerows(rows)
+    return buf.getvalue()
+
+
+def _num(v) -> str:
+    if v is None:
+        return ""
+    return repr(float(v)) if isinstance(v, float) else str(v)

@@ -1,0 +1,25 @@
+"""Reading the user's text files (decks, records, measured loops) with one-line errors."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from rbhyst.errors import InputError
+
+
+def read_text(path: Path, encoding: str = "utf-8") -> str:
+    """The file's text; a missing, unreadable or binary file is an InputError naming it."""
+    try:
+        return Path(path).read_text(encoding=encoding)
+    except FileNotFoundError:
+        raise InputError(f"{path}: no such file") from None
+    except (OSError, UnicodeDecodeError) as exc:
+        raise InputError(f"{path}: cannot be read ({exc.__class__.__name__})") from None
+
+
+def is_number(tok: str) -> bool:
+    try:
+        float(tok)
+    except ValueError:
+        return False
+    return True

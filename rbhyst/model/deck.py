@@ -1,0 +1,698 @@
+"""The input deck: pydantic models (unknown keys forbidden) and ``load_deck``.
+
+A deck is TOML or YAML with the same structure. Validation errors become
+:class:`~rbhyst.errors.InputError` with one line per problem, each naming the
+deck location (list indices count from 1, as vertices and elements do in the
+seed and in the CSV columns).
+"""
+
+from __future__ import annotations
+
+import re
+import tomllib
+from pathlib import Path
+from typing import Annotated, Any, Generic, Literal, TypeVar, Union
+
+import numpy as np
+import yaml
+from pydantic import (BaseModel, ConfigDict, Discriminator, Field, PrivateAttr, Tag, ValidationError, field_validator,
+                      model_validator)
+from pydantic_core import PydanticCustomError
+
+from rbhyst.errors import InputError
+from rbhyst.model.periods import default_periods
+from rbhyst.files.textfiles import read_text
+from rbhyst.model.hysteresis import limiting_curve, limiting_slope, parameter_set, reversal_stiffness
+
+PosFloat = Annotated[float, Field(gt=0)]
+Point = Annotated[list[float], Field(min_length=2, max_length=2)]
+
+ACCEL_UNITS = {"g": 9.80665, "m/s2": 1.0, "cm/s2": 0.01}
+FORCE_UNITS = {"N": 1.0, "kN": 1e3}
+MOMENT_UNITS = {"N m": 1.0, "kN m": 1e3}
+
+AccelUnits = Literal["g", "m/s2", "cm/s2"]
+ForceUnits = Literal["N", "kN"]
+MomentUnits = Literal["N m", "kN m"]
+U = TypeVar("U")
+
+#: the integrators by name (rbhyst.solve.integrators implements each), the default first
+INTEGRATORS = ("chang", "central-difference", "newmark", "kr-alpha", "reference", "adaptive")
+
+
+class _Model(BaseModel):
+    model_config = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False, frozen=True)
+
+
+# ---------------------------------------------------------------- hysteresis
+
+
+class Branch(_Model):
+    """Eight VRM parameters of one branch (seed eqs. 14-15)."""
+
+    kb: float
+    f0: float
+    alpha: PosFloat
+    beta1: float = 0.0
+    beta2: float = 0.0
+    gamma1: float = 0.0
+    gamma2: float = 0.0
+    gamma3: float = 0.0
+
+
+class HysteresisSet(_Model):
+    """A named VRM set: ``loading`` applies for s > 0, ``unloading`` for s < 0."""
+
+    loading: Branch
+    unloading: Branch
+
+    @model_validator(mode="after")
+    def _curves_ordered(self):
+        p = self.array()
+        with np.errstate(over="ignore", invalid="ignore"):
+            k = reversal_stiffness(p, 0.0)
+            slopes = [float(limiting_slope(p, s, 0.0)) for s in (1, -1)]
+        # no support is stiffer than 1e100 N/m; beyond it sums of stiffnesses may overflow
+        if not all(abs(x) < 1e100 for x in (k, *slopes)):
+            raise ValueError(f"the stiffness at u = 0 ({max(abs(k), *map(abs, slopes)):.3g}) is far out of "
+                             "any physical range")
+        gap = float(limiting_curve(p, 1, 0.0) - limiting_curve(p, -1, 0.0))
+        if not gap >= 0.0:
+            raise ValueError(
+                f"the limiting curves cross at u = 0: c+(0) - c-(0) = {gap:.6g} must be >= 0 "
+                "(with equal other parameters: f0 of loading + f0 of unloading >= 0; "
+                "equal curves make a nonlinear elastic element)"
+            )
+        return self
+
+    def array(self) -> np.ndarray:
+        return parameter_set(self.loading.model_dump(), self.unloading.model_dump())
+
+
+# ---------------------------------------------------------------- body and elements
+
+
+def _key_problems(problems: list[tuple[str, str]]) -> PydanticCustomError:
+    """Problems with named keys of a table, raised from its model validator: one line per key."""
+    return PydanticCustomError("deck_keys", "; ".join(f"{k}: {m}" for k, m in problems),
+                               {"problems": tuple(problems)})
+
+
+Vertices = Annotated[list[Point], Field(min_length=3)]
+
+
+class Part(_Model):
+    """One uniform polygon of a body of several parts (seed eqs. 1-4 each)."""
+
+    vertices: Vertices
+    mass: PosFloat
+
+
+class Body(_Model):
+    """Exactly one of three forms: ``vertices`` + ``mass`` (one uniform polygon), ``parts``
+    (several uniform polygons, which may overlap), or ``mass`` + ``mass_centre`` + ``inertia``
+    (about the mass centre) + ``vertices`` (the outline, for drawing and vertex references)."""
+
+    vertices: Vertices | None = None
+    mass: PosFloat | None = None
+    parts: Annotated[list[Part], Field(min_length=1)] | None = None
+    mass_centre: Point | None = None
+    inertia: PosFloat | None = None
+    #: the acceleration of gravity in the deck's frame (m/s2): the weight m g acts at G and the
+    #: run starts from the static equilibrium under it (see README, "Gravity preload")
+    gravity: Point | None = None
+
+    @model_validator(mode="after")
+    def _one_form(self):
+        given = [k for k in ("vertices", "mass", "mass_centre", "inertia") if getattr(self, k) is not None]
+        problems = []
+        if self.parts is not None:
+            why = {"vertices": "the parts' vertices are the outline", "mass": "each part has its own mass",
+                   "mass_centre": "the parts give the mass centre", "inertia": "the parts give the inertia"}
+            problems = [(k, f"not with body.parts: {why[k]}") for k in given]
+        else:
+            problems = [(k, "required key is missing") for k in ("vertices", "mass") if k not in given]
+            direct = ("mass_centre", "inertia")
+            if any(k in given for k in direct):
+                problems += [(k, f"required with body.{other}: a body given by its properties needs mass, "
+                                 "mass_centre, inertia (about the mass centre) and vertices (its outline)")
+                             for k, other in (direct, direct[::-1]) if k not in given]
+        if problems:
+            raise _key_problems(problems)
+        return self
+
+    @property
+    def form(self) -> Literal["polygon", "parts", "direct"]:
+        if self.parts is not None:
+            return "parts"
+        return "polygon" if self.inertia is None else "direct"
+
+
+class _Placed(_Model):
+    """Something attached to the body at a vertex or a point, along an angle."""
+
+    part: Annotated[int, Field(ge=1)] | None = None
+    vertex: Annotated[int, Field(ge=1)] | None = None
+    point: Point | None = None
+    angle_deg: float
+    count: Annotated[int, Field(ge=1)] = 1
+
+    @model_validator(mode="after")
+    def _one_place(self):
+        if (self.vertex is None) == (self.point is None):
+            raise ValueError("give exactly one of `vertex` (1-based index) or `point` ([x1, x2] in m)")
+        if self.part is not None and self.vertex is None:
+            raise _key_problems([("part", "goes with `vertex` (that part's vertex); a `point` is in the "
+                                          "deck's frame whichever part it lies on")])
+        return self
+
+
+def _number(v) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool)
+
+
+class Element(_Placed):
+    hysteresis: str
+    #: the deformation it can take (m): symmetric, or [lower, upper] with lower < 0 < upper
+    stroke: float | list[float] | None = None
+
+    @field_validator("stroke", mode="before")
+    @classmethod
+    def _stroke(cls, v):
+        what = "a positive number (m) or [lower, upper] with lower < 0 < upper (m)"
+        if v is None:
+            return v
+        if _number(v):
+            if not (v > 0 and np.isfinite(v)):
+                raise ValueError(f"{v:g} must be {what}")
+            return float(v)
+        if isinstance(v, list) and len(v) == 2 and all(_number(x) and np.isfinite(x) for x in v):
+            if not v[0] < 0.0 < v[1]:
+                raise ValueError(f"[{v[0]:g}, {v[1]:g}] must be [lower, upper] with lower < 0 < upper (m)")
+            return [float(x) for x in v]
+        raise ValueError(f"{v!r} must be {what}")
+
+    @property
+    def stroke_limits(self) -> tuple[float, float] | None:
+        if self.stroke is None:
+            return None
+        return (-self.stroke, self.stroke) if not isinstance(self.stroke, list) else tuple(self.stroke)
+
+
+class Damper(_Placed):
+    """A linear viscous damper: force c times its rate of deformation along angle_deg (eqs. 5-8);
+    c = 0 keeps its place and columns with no force (a sweep's no-damper baseline)."""
+
+    c: Annotated[float, Field(ge=0)]  # N s/m
+
+
+class Rayleigh(_Model):
+    """C = a0 M + a1 K0 (K0 the initial system's stiffness, as summary.json's k0): the damping
+    ``ratio`` at two frequencies, given in Hz or as two modes of (M, K0) counted from 1."""
+
+    ratio: Annotated[float, Field(gt=0, lt=1)] | Annotated[list[Annotated[float, Field(gt=0, lt=1)]],
+                                                           Field(min_length=2, max_length=2)]
+    frequencies_hz: Annotated[list[PosFloat], Field(min_length=2, max_length=2)] | None = None
+    modes: Annotated[list[Annotated[int, Field(ge=1, le=3)]], Field(min_length=2, max_length=2)] | None = None
+
+    @model_validator(mode="after")
+    def _two_points(self):
+        given = [k for k in ("frequencies_hz", "modes") if getattr(self, k) is not None]
+        if len(given) != 1:
+            raise ValueError("give exactly one of `frequencies_hz` ([f1, f2] in Hz) or `modes` ([i, j], "
+                             "the initial system's modes counted from 1)")
+        pair = getattr(self, given[0])
+        if pair[0] == pair[1]:
+            raise _key_problems([(given[0], f"{pair}: two different {'frequencies' if given[0][0] == 'f' else 'modes'}"
+                                            " (one point does not fix a0 and a1)")])
+        return self
+
+    @property
+    def ratios(self) -> tuple[float, float]:
+        return tuple(self.ratio) if isinstance(self.ratio, list) else (self.ratio, self.ratio)
+
+
+class Damping(_Model):
+    """Damping beyond the elements' hysteresis and the dampers: Rayleigh's, optionally."""
+
+    rayleigh: Rayleigh | None = None
+
+
+# ---------------------------------------------------------------- excitation
+
+
+class Record(_Model, Generic[U]):
+    """A history read from a file: PEER .AT2, two columns time,value, or one column with ``dt``."""
+
+    type: Literal["record"] = "record"
+    file: str
+    units: U
+    scale: float = 1.0
+    dt: PosFloat | None = None
+
+
+class Sine(_Model, Generic[U]):
+    """amplitude * sin(2 pi f t + phase), from t = start for ``cycles`` cycles (default: all)."""
+
+    type: Literal["sine"]
+    amplitude: float
+    frequency_hz: PosFloat
+    units: U
+    phase_deg: float = 0.0
+    start: Annotated[float, Field(ge=0)] = 0.0
+    cycles: PosFloat | None = None
+    #: the amplitude rises smoothly from 0 over this many cycles (signals.ramp_envelope)
+    ramp_cycles: Annotated[float, Field(ge=0)] = 0.0
+
+
+PULSES = ("half-sine", "haversine", "terminal-peak-sawtooth", "triangle")
+
+
+class Pulse(_Model, Generic[U]):
+    """A shock pulse of peak ``amplitude`` lasting ``duration`` s from ``start`` (MIL-DTL-901,
+    MIL-STD-810 shapes): half-sine, haversine, terminal-peak sawtooth, symmetric triangle."""
+
+    type: Literal["half-sine", "haversine", "terminal-peak-sawtooth", "triangle"]
+    amplitude: float
+    units: U
+    duration: PosFloat
+    start: Annotated[float, Field(ge=0)] = 0.0
+
+
+def _signal_kind(v: Any) -> str:
+    kind = v.get("type", "record") if isinstance(v, dict) else getattr(v, "type", "record")
+    return "pulse" if kind in PULSES else kind
+
+
+def _signal(units):
+    return Annotated[
+        Union[Annotated[Record[units], Tag("record")], Annotated[Sine[units], Tag("sine")],
+              Annotated[Pulse[units], Tag("pulse")]],
+        Discriminator(_signal_kind),
+    ]
+
+
+class Support(_Model):
+    x1: _signal(AccelUnits) | None = None
+    x2: _signal(AccelUnits) | None = None
+
+
+class Force(_Model):
+    #: where p1 and p2 act, in the deck's frame; absent: at the mass centre G (said in a note)
+    point: Point | None = None
+    p1: _signal(ForceUnits) | None = None
+    p2: _signal(ForceUnits) | None = None
+    m3: _signal(MomentUnits) | None = None
+
+
+class Excitation(_Model):
+    support: Support | None = None
+    force: Force | None = None
+
+
+# ---------------------------------------------------------------- analysis and output
+
+
+class Analysis(_Model):
+    dt: PosFloat
+    duration: PosFloat | None = None
+    integrator: str = "chang"
+    #: accuracy limit on the stiffest instantaneous mode: omega_max * h (see README)
+    max_omega_dt: PosFloat = 0.5
+    #: at most 2**max_substep_level substeps per step before the run stops
+    max_substep_level: Annotated[int, Field(ge=0, le=20)] = 12
+    #: the adaptive integrator's relative tolerance
+    rtol: Annotated[float, Field(gt=1e-14, lt=1e-2)] = 1e-8
+    #: the accuracy asked for: rbhyst chooses how to meet it (see README, "Accuracy")
+    tolerance: Annotated[float, Field(gt=0, lt=1)] | None = None
+    #: a run whose estimated error exceeds this warns
+    warn_error: Annotated[float, Field(gt=0, lt=1)] = 0.01
+    #: estimate every run's error (false skips it: a sweep that has checked its dt once)
+    estimate_error: bool = True
+
+    @field_validator("integrator")
+    @classmethod
+    def _known(cls, v: str) -> str:
+        if v not in INTEGRATORS:
+            raise ValueError(f"unknown integrator {v!r}; choose one of {', '.join(INTEGRATORS)}")
+        return v
+
+
+#: names a point may not take (case aside): G's own plots and spectra, the ground's spectra
+RESERVED_POINT_NAMES = ("G", "ground", "x1", "x2", "theta3")
+_POINT_NAME = re.compile(r"[A-Za-z0-9_]+")
+
+
+class OutputPoint(_Model):
+    """A point of interest on the body: its motion gets columns `<name>_u1_m`, ... (eqs. 7-8)."""
+
+    name: str
+    point: Point  # m, in the deck's frame
+
+    @field_validator("name")
+    @classmethod
+    def _name(cls, v: str) -> str:
+        if not _POINT_NAME.fullmatch(v):
+            raise ValueError(f"{v!r}: letters, digits and _ only (it names columns and files)")
+        reserved = {r.lower(): r for r in RESERVED_POINT_NAMES}
+        if v.lower() in reserved:
+            raise ValueError(f"{v!r} is taken by rbhyst's own outputs ({', '.join(RESERVED_POINT_NAMES)}: "
+                             "the mass centre's plots, the ground's spectra): choose another")
+        return v
+
+
+Ratio = Annotated[float, Field(ge=0, lt=1)]
+
+
+class Spectra(_Model):
+    """Response spectra of the ground, of G and of every point (see README, "Outputs")."""
+
+    #: damping ratios of the oscillators (a number or a list)
+    damping: Annotated[list[Ratio], Field(min_length=1)] = [0.05]
+    #: s; default: 100 periods log-spaced from 0.01 to 10 s
+    periods_s: Annotated[list[PosFloat], Field(min_length=1)] | None = None
+
+    @field_validator("damping", mode="before")
+    @classmethod
+    def _one_is_a_list(cls, v):
+        return [v] if isinstance(v, (int, float)) and not isinstance(v, bool) else v
+
+    @field_validator("damping")
+    @classmethod
+    def _distinct_dampings(cls, v):
+        if len(set(v)) != len(v):
+            raise ValueError(f"{v}: each damping once")
+        return v
+
+    @field_validator("periods_s")
+    @classmethod
+    def _distinct_periods(cls, v):
+        if v is not None and len(set(v)) != len(v):
+            raise ValueError("each period once")
+        return v
+
+    @property
+    def dampings(self) -> tuple[float, ...]:
+        return tuple(self.damping)
+
+    @property
+    def periods(self) -> tuple[float, ...]:
+        """Ascending; the default when none are given."""
+        if self.periods_s is None:
+            return tuple(float(t) for t in default_periods())
+        return tuple(sorted(self.periods_s))
+
+
+class Output(_Model):
+    directory: str | None = None
+    plots: bool = True
+    every: Annotated[int, Field(ge=1)] = 1
+    #: points of interest on the body (their motion in time_history.csv, plots, spectra)
+    points: list[OutputPoint] | None = None
+    #: response spectra (only when present: a run pays for what it asks)
+    spectra: Spectra | None = None
+
+
+class Loops(_Model):
+    """Imposed-displacement protocol for ``rbhyst calibrate-plot`` (default: the seed's Fig. 2)."""
+
+    amplitude: float | list[float] = 1.5
+
+    @field_validator("amplitude", mode="before")
+    @classmethod
+    def _amplitudes(cls, v):
+        what = "a positive number (m) or a list of them"
+        if _number(v) and v > 0 and np.isfinite(v):
+            return float(v)
+        if isinstance(v, list) and v and all(_number(x) and x > 0 and np.isfinite(x) for x in v):
+            return [float(x) for x in v]
+        raise ValueError(f"{v!r} must be {what}")
+    frequency_hz: PosFloat = 1.0
+    cycles: Annotated[int, Field(ge=1)] = 2
+    points_per_cycle: Annotated[int, Field(ge=8)] = 2000
+
+
+class Deck(_Model):
+    title: str | None = None
+    body: Body | None = None
+    hysteresis: Annotated[dict[str, HysteresisSet], Field(min_length=1)]
+    elements: Annotated[list[Element], Field(min_length=1)] | None = None
+    dampers: list[Damper] | None = None
+    damping: Damping | None = None
+    excitation: Excitation | None = None
+    analysis: Analysis | None = None
+    output: Output = Output()
+    loops: Loops | None = None
+    #: the file the deck came from (None for one built in code): relative paths resolve beside it
+    _source: Path | None = PrivateAttr(default=None)
+
+    @property
+    def source(self) -> Path | None:
+        return self._source
+
+    @property
+    def base(self) -> Path:
+        """The folder that relative file paths in the deck resolve against."""
+        return self._source.parent if self._source is not None else Path.cwd()
+
+    def with_values(self, values: dict[str, Any]) -> "Deck":
+        """A copy with values replaced by dotted keys as in the deck, e.g.
+        ``{"hysteresis.wri_shear.loading.kb": 2.2e5, "body.mass": 700.0, "elements[2].count": 3}``.
+
+        Every key but the last must exist in the deck; the result is validated like a deck
+        (an InputError names the key and what is wrong).
+        """
+        data = self.model_dump(mode="python", exclude_unset=True, exclude_defaults=False)
+        problems = []
+        for key, value in values.items():
+            try:
+                set_dotted(data, key, value)
+            except KeyError as err:
+                problems.append(f"{key}: {err.args[0]}")
+        if problems:
+            raise InputError(problems)
+        deck = parse_deck(data)
+        deck._source = self._source
+        return deck
+
+
+_KEY_PART = re.compile(r"([^.\[\]]+)|\[(\d+)\]")
+
+
+def split_key(key: str) -> list[str | int]:
+    """'elements[2].count' -> ['elements', 1, 'count'] (list indices count from 1, as in error lines)."""
+    parts: list[str | int] = []
+    pos = 0
+    for m in _KEY_PART.finditer(key):
+        gap = key[pos:m.start()]
+        if gap not in ("", "."):
+            raise KeyError("cannot read the key")
+        pos = m.end()
+        if m.group(2) is not None:
+            k = int(m.group(2))
+            if k < 1:
+                raise KeyError("list indices count from 1")
+            parts.append(k - 1)
+        elif m.group(1).isdigit() and parts:
+            parts.append(int(m.group(1)) - 1)  # elements.2.count: the same as elements[2].count
+        else:
+            parts.append(m.group(1))
+    if not parts or pos != len(key):
+        raise KeyError("cannot read the key")
+    return parts
+
+
+def set_dotted(data: dict, key: str, value: Any) -> None:
+    """Set ``data`` at a dotted deck key; every part but the last must exist (KeyError otherwise)."""
+    parts = split_key(key)
+    node: Any = data
+    for i, part in enumerate(parts[:-1]):
+        where = _format_loc(tuple(parts[:i + 1]))
+        if isinstance(part, int):
+            if not isinstance(node, list) or not 0 <= part < len(node):
+                raise KeyError(f"no {where} in the deck")
+        elif not isinstance(node, dict) or part not in node or node[part] is None:
+            raise KeyError(f"no {where} in the deck")
+        node = node[part]
+    last = parts[-1]
+    if isinstance(last, int):
+        if not isinstance(node, list) or not 0 <= last < len(node):
+            raise KeyError(f"no {_format_loc(tuple(parts))} in the deck")
+    elif not isinstance(node, dict):
+        raise KeyError(f"{_format_loc(tuple(parts[:-1]))} is not a table")
+    node[last] = value
+
+
+def cross_references(deck: Deck) -> list[str]:
+    """Problems that span sections: undefined sets, vertex indices out of range."""
+    problems = []
+    for k, el in enumerate(deck.elements or [], start=1):
+        if el.hysteresis not in deck.hysteresis:
+            problems.append(
+                f"elements[{k}].hysteresis: undefined set {el.hysteresis!r}; "
+                f"defined: {', '.join(sorted(deck.hysteresis))}"
+            )
+        if el.vertex is not None and deck.body is not None:
+            problems += [f"elements[{k}].{p}" for p in vertex_reference_problems(deck.body, el.part, el.vertex)]
+    for k, dp in enumerate(deck.dampers or [], start=1):
+        if dp.vertex is not None and deck.body is not None:
+            problems += [f"dampers[{k}].{p}" for p in vertex_reference_problems(deck.body, dp.part, dp.vertex)]
+    return problems
+
+
+def output_problems(deck: Deck) -> list[str]:
+    """Point names used twice (ignoring case: they name files)."""
+    problems, seen = [], {}
+    for k, p in enumerate(deck.output.points or [], start=1):
+        first = seen.setdefault(p.name.lower(), k)
+        if first != k:
+            problems.append(f"output.points[{k}].name: {p.name!r} is already the name of output.points[{first}]"
+                            + (" (names differ only in case, and they name files)" if
+                               deck.output.points[first - 1].name != p.name else ""))
+    return problems
+
+
+def vertex_reference_problems(body: Body, part: int | None, vertex: int) -> list[str]:
+    """What is wrong with ``part``/``vertex`` of an element on ``body`` ("key: message").
+
+    With parts, ``vertex`` alone is the vertex of part 1 when there is one part and an
+    error when there are several (which part's would be a guess); without parts, ``part``
+    is an error and ``vertex`` counts body.vertices.
+    """
+    if body.parts is None:
+        if part is not None:
+            return ["part: the body has no parts: `vertex` alone counts body.vertices"]
+        if vertex > len(body.vertices):
+            return [f"vertex: {vertex} is out of range: the body has {len(body.vertices)} vertices"]
+        return []
+    n = len(body.parts)
+    if part is None:
+        if n > 1:
+            return [f"vertex: the body has {n} parts: say whose vertex with `part` (1 to {n})"]
+        part = 1
+    if part > n:
+        return [f"part: {part} is out of range: the body has {n} part{'s' if n > 1 else ''}"]
+    nv = len(body.parts[part - 1].vertices)
+    if vertex > nv:
+        return [f"vertex: {vertex} is out of range: body.parts[{part}] has {nv} vertices"]
+    return []
+
+
+def check_runnable(deck: Deck) -> None:
+    """``rbhyst run`` needs a body, elements and an analysis section; loops do not."""
+    missing = [f"{key}: required for an analysis" for key in ("body", "elements", "analysis")
+               if getattr(deck, key) is None]
+    if missing:
+        raise InputError(missing)
+    a = deck.analysis
+    if a.duration is not None and a.dt > a.duration:
+        raise InputError(f"analysis.dt: {a.dt} s is larger than analysis.duration = {a.duration} s")
+    if deck.excitation is None or (deck.excitation.support is None and deck.excitation.force is None):
+        if a.duration is None:
+            raise InputError("analysis.duration: required when there is no excitation to take it from")
+
+
+# ---------------------------------------------------------------- loading
+
+
+class _YamlLoader(yaml.SafeLoader):
+    """Safe loading (no object tags) with YAML 1.2 floats, so ``1e-3`` is a number as in TOML."""
+
+
+_YamlLoader.add_implicit_resolver(
+    "tag:yaml.org,2002:float",
+    re.compile(
+        r"""^(?:[-+]?(?:[0-9][0-9_]*)\.[0-9_]*(?:[eE][-+]?[0-9]+)?
+        |[-+]?(?:[0-9][0-9_]*)(?:[eE][-+]?[0-9]+)
+        |\.[0-9_]+(?:[eE][-+]?[0-9]+)?
+        |[-+]?\.(?:inf|Inf|INF)
+        |\.(?:nan|NaN|NAN))$""",
+        re.X,
+    ),
+    list("-+0123456789."),
+)
+
+
+def _format_loc(loc: tuple) -> str:
+    out = ""
+    for part in loc:
+        if isinstance(part, int):
+            out += f"[{part + 1}]"
+        elif part in ("record", "sine", "pulse") or str(part).startswith(("Record[", "Sine[", "Pulse[")):
+            continue  # the union's tag is noise to a user
+        elif re.fullmatch(r"[A-Za-z0-9_\-]+", str(part)):
+            out += ("." if out else "") + str(part)
+        else:  # a key with spaces or control characters: quoted, so the message stays one line
+            out += f"[{str(part)!r}]"
+    return out or "(deck)"
+
+
+def _messages(err: ValidationError) -> list[str]:
+    lines = []
+    for e in err.errors():
+        msg = e["msg"]
+        if msg.startswith("Value error, "):
+            msg = msg[len("Value error, "):]
+        if e["type"] == "extra_forbidden":
+            msg = "unknown key"
+        elif e["type"] == "missing":
+            msg = "required key is missing"
+        elif e["type"] == "deck_keys":  # several problems, each under its own key
+            lines += [f"{_format_loc((*e['loc'], key))}: {m}" for key, m in e["ctx"]["problems"]]
+            continue
+        elif e["type"] == "union_tag_invalid":
+            msg = (f"unknown type {e['ctx']['tag']!r}: use type = \"sine\" or a pulse "
+                   f"({', '.join(repr(p) for p in PULSES)}), or give `file` (and no type) for a record")
+        lines.append(f"{_format_loc(e['loc'])}: {msg}")
+    return list(dict.fromkeys(lines))
+
+
+#: the sections an analysis needs (a deck for calibrate-plot needs only [hysteresis])
+ANALYSIS_SECTIONS = ("body", "elements", "analysis")
+
+
+def parse_deck(data: Any, need: tuple[str, ...] = ()) -> Deck:
+    """Validate a parsed mapping; raise InputError with one line per problem, every problem at
+    once: those of the keys given and every section of ``need`` that is missing."""
+    if not isinstance(data, dict):
+        raise InputError("(deck): the top level must be a table of keys")
+    missing = [f"{key}: required for an analysis" for key in need if data.get(key) is None]
+    try:
+        deck = Deck.model_validate(data)
+    except ValidationError as err:
+        raise InputError(_messages(err) + missing) from None
+    problems = missing + cross_references(deck) + output_problems(deck)
+    if problems:
+        raise InputError(problems)
+    return deck
+
+
+def read_mapping(path: Path) -> dict:
+    """Parse a TOML (.toml) or YAML (.yaml/.yml) file into a mapping."""
+    text = read_text(path)
+    suffix = path.suffix.lower()
+    if suffix == ".toml":
+        try:
+            return tomllib.loads(text)
+        except tomllib.TOMLDecodeError as exc:
+            raise InputError(f"{path}: TOML syntax error: {exc}") from None
+    if suffix in (".yaml", ".yml"):
+        try:
+            data = yaml.load(text, Loader=_YamlLoader)
+        except yaml.MarkedYAMLError as exc:
+            mark = exc.problem_mark
+            where = f" (at line {mark.line + 1}, column {mark.column + 1})" if mark else ""
+            raise InputError(f"{path}: YAML error: {exc.problem}{where}") from None
+        except yaml.YAMLError as exc:
+            raise InputError(f"{path}: YAML error: {exc}") from None
+        return data if data is not None else {}
+    raise InputError(f"{path}: unknown deck format {suffix!r}; use .toml, .yaml or .yml")
+
+
+def load_deck(path: str | Path, need: tuple[str, ...] = ()) -> Deck:
+    """Read and validate a deck file; relative paths in it resolve beside it. ``need``: sections
+    it must have (ANALYSIS_SECTIONS for a run), named with every other problem at once."""
+    deck = parse_deck(read_mapping(Path(path)), need)
+    deck._source = Path(path).resolve()
+    return deck
+

@@ -1,0 +1,61 @@
+"""How to integrate a scene: the deck's [analysis] and output.every after command-line overrides."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from rbhyst.errors import InputError
+
+
+@dataclass(frozen=True)
+class Settings:
+    integrator: str = "chang"
+    dt: float = 1e-3
+    duration: float | None = None
+    every: int = 1
+    max_omega_dt: float = 0.5
+    max_substep_level: int = 12
+    #: newmark: Newton correction <= newton_tol x the step's increment, at most newton_max_iter iterations
+    newton_tol: float = 1e-10
+    newton_max_iter: int = 20
+    #: the adaptive integrator's relative tolerance
+    rtol: float = 1e-8
+    #: the accuracy asked for (None: run as set, and estimate the error)
+    tolerance: float | None = None
+    #: above this estimated error a run warns
+    warn_error: float = 0.01
+    #: estimate the error of the run (an adaptive solution at two tolerances)
+    estimate: bool = True
+    #: output.points: (name, (x1, x2) in the deck's frame), in deck order
+    points: tuple[tuple[str, tuple[float, float]], ...] = ()
+    #: output.spectra: (dampings, periods in s) or None for no spectra
+    spectra: tuple[tuple[float, ...], tuple[float, ...]] | None = None
+
+
+def settings_from_deck(deck, integrator: str | None = None, dt: float | None = None,
+                       tolerance: float | None = None) -> Settings:
+    """The deck's [analysis] and output.every, with command-line overrides validated like the deck."""
+    from rbhyst.model.deck import INTEGRATORS, check_runnable
+
+    check_runnable(deck)
+    a = deck.analysis
+    if integrator is not None and integrator not in INTEGRATORS:
+        raise InputError(f"--integrator: unknown {integrator!r}; choose one of {', '.join(INTEGRATORS)}")
+    if dt is not None and not dt > 0:
+        raise InputError(f"--dt: {dt} must be > 0")
+    if tolerance is not None and not 0 < tolerance < 1:
+        raise InputError(f"--tolerance: {tolerance} must be between 0 and 1 (a relative error)")
+    return Settings(
+        integrator=integrator or a.integrator,
+        dt=dt or a.dt,
+        duration=a.duration,
+        every=deck.output.every,
+        max_omega_dt=a.max_omega_dt,
+        max_substep_level=a.max_substep_level,
+        rtol=a.rtol,
+        tolerance=tolerance if tolerance is not None else a.tolerance,
+        warn_error=a.warn_error,
+        estimate=a.estimate_error,
+        points=tuple((p.name, (p.point[0], p.point[1])) for p in deck.output.points or ()),
+        spectra=None if deck.output.spectra is None else (deck.output.spectra.dampings, deck.output.spectra.periods),
+    )

@@ -1,0 +1,527 @@
+"""Assemble a validated deck into a :class:`System` of plain arrays (seed eqs. 1-13).
+
+Pydantic objects stop here: everything downstream sees numpy arrays, floats and
+callables of time.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+from rbhyst.model import deck as dk
+from rbhyst.model import signals
+from rbhyst.errors import InputError
+from rbhyst.model.body import Body, body_from_deck
+from rbhyst.model.hysteresis import limiting_slope, reversal_stiffness
+from rbhyst.files.units import check_declared
+from rbhyst.model.records import Series, read_record
+
+Signal = Callable[[np.ndarray], np.ndarray]
+
+
+@dataclass(frozen=True)
+class Excitation:
+    """Support acceleration (m/s2) and external generalized forces at G (N, N m)."""
+
+    ag1: Signal | None = None
+    ag2: Signal | None = None
+    p1: Signal | None = None
+    p2: Signal | None = None
+    m3: Signal | None = None
+    point: tuple[float, float] = (0.0, 0.0)  # where p1, p2 act, relative to G
+    #: a load that does not vary: the weight, once the static equilibrium under it is known
+    constant: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    duration: float | None = None  # of the longest record or finite pulse
+
+    @property
+    def has_support(self) -> bool:
+        return self.ag1 is not None or self.ag2 is not None
+
+    @property
+    def signals(self) -> dict[str, Signal]:
+        return {k: s for k, s in (("ag1", self.ag1), ("ag2", self.ag2), ("p1", self.p1), ("p2", self.p2),
+                                  ("m3", self.m3)) if s is not None}
+
+    def acts_before(self, t_end: float) -> bool:
+        """Whether any signal is non-zero somewhere in [0, t_end)."""
+        return any(s.acts_before(t_end) for s in self.signals.values())
+
+    def substeps(self, dt: float, n_steps: int) -> tuple[np.ndarray, np.ndarray]:
+        """Compute steps per output step that follow every signal acting then: a record's
+        samples, a sine's period or a pulse's shape over signals.POINTS_PER_FEATURE; outside a
+        signal's span its shape costs nothing.
+
+        Returns (bounds, nsub): output steps bounds[i] to bounds[i + 1] (step k runs from k dt
+        to (k + 1) dt) take nsub[i] compute steps each; a few numbers however long the run.
+        """
+        spans = []
+        for s in self.signals.values():
+            need = max(1, math.ceil(dt / s.step - 1e-9))
+            if need == 1:
+                continue
+            # one step more on either side: the coarse steps next to the span then see none of
+            # it (an analytic signal's node values are hat averages, see load_nodes)
+            first = max(0, math.floor(s.start / dt) - 1)
+            last = n_steps if s.end is None else min(n_steps, math.ceil(s.end / dt) + 1)
+            if first < last:
+                spans.append((first, last, need))
+        bounds = np.unique([0, n_steps, *(f for f, _, _ in spans), *(l for _, l, _ in spans)])
+        nsub = np.ones(len(bounds) - 1, dtype=np.int64)
+        for first, last, need in spans:
+            inside = (bounds[:-1] >= first) & (bounds[1:] <= last)
+            nsub[inside] = np.maximum(nsub[inside], need)
+        return bounds, nsub
+
+    def support(self, t: np.ndarray) -> np.ndarray:
+        """(n, 2) support acceleration, each signal's value at t (at a jump, that of its span)."""
+        out = np.zeros((len(t), 2))
+        if self.ag1 is not None:
+            out[:, 0] = self.ag1(t)
+        if self.ag2 is not None:
+            out[:, 1] = self.ag2(t)
+        return out
+
+    def forces(self, t: np.ndarray) -> np.ndarray:
+        """(n, 3) the generalized external forces on the body at t, support motion left out: the
+        constant load (the weight, held by the static preload) and (p1, p2, p3) (eq. 13); at a
+        jump, each signal's value on its span (rows hold the pulse's side of its ends)."""
+        forces = {k: s for k, s in self.signals.items() if k in FORCE_SIGNALS}
+        return self._combine({k: s(t) for k, s in forces.items()}, len(t), None)
+
+    def load(self, t: np.ndarray, mass: np.ndarray) -> np.ndarray:
+        """(n, 3) generalized load p = -M (ag1, ag2, 0) + (p1, p2, p3), eq. 13 for p3."""
+        return self._combine({k: s(t) for k, s in self.signals.items()}, len(t), mass)
+
+    def load_nodes(self, t: np.ndarray, h: float, mass: np.ndarray) -> np.ndarray:
+        """(n, 3) load at the nodes t (spacing h) of a compute grid that interpolates it linearly.
+
+        Records are linear between their samples and are taken at the nodes, and so is an
+        analytic signal where it is smooth. Within a step of one of its breakpoints (where it
+        starts, stops or has a corner) a node takes the signal's average under its hat function
+        (weight 1 - |t - t_k| / h), so that the trapezoidal impulse over the steps around it is
+        the signal's exact integral: a jump (a sawtooth's end, a sine stopping at a non-zero
+        value) falls wherever it falls and never costs an order of accuracy.
+        """
+        values = {}
+        for k, s in self.signals.items():
+            v = s(t)
+            if not isinstance(s, Series):
+                near = np.zeros(len(t), dtype=bool)
+                for b in s.breakpoints:
+                    if b > 0.0:  # a signal that starts with the analysis starts at its right limit
+                        near |= np.abs(t - b) < h
+                if near.any():
+                    v[near] = signals.hat_average(s, t[near], h)
+            values[k] = v
+        return self._combine(values, len(t), mass)
+
+    def weights(self, mass: np.ndarray | None) -> dict[str, np.ndarray]:
+        """How a unit of each signal enters the generalized load: -M along its axis for a
+        support acceleration, (1, 0, -x2P), (0, 1, x1P), (0, 0, 1) for p1, p2, m3 (eq. 13)."""
+        x1p, x2p = self.point
+        out = {"p1": np.array([1.0, 0.0, -x2p]), "p2": np.array([0.0, 1.0, x1p]), "m3": np.array([0.0, 0.0, 1.0])}
+        if mass is not None:
+            out["ag1"] = np.array([-mass[0], 0.0, 0.0])
+            out["ag2"] = np.array([0.0, -mass[1], 0.0])
+        return out
+
+    def analytic_table(self, mass: np.ndarray) -> np.ndarray:
+        """(signals, ROW_SIZE + 3): every analytic signal as a row of signals.ROW_SIZE floats and
+        its three weights into the load, for compiled code that evaluates them exactly."""
+        w = self.weights(mass)
+        rows = [s.row() + list(w[k]) for k, s in self.signals.items() if not isinstance(s, Series)]
+        return np.array(rows, dtype=float).reshape(-1, signals.ROW_SIZE + 3)
+
+    def record_pieces(self, brk: np.ndarray, mass: np.ndarray) -> np.ndarray:
+        """(pieces, 2, 3) the constant load and the records' share of it at both ends of every
+        piece brk[k]..brk[k + 1], each end's value seen from inside the piece (a record is zero
+        before its first sample and after its last: a piece outside it sees zero). The
+        records are linear between their samples: with the samples among the breakpoints,
+        linear pieces are exact."""
+        ta, tb = brk[:-1], brk[1:]
+        out = np.empty((len(ta), 2, 3))
+        out[:] = self.constant
+        w = self.weights(mass)
+        for k, s in self.signals.items():
+            if isinstance(s, Series):
+                out[:, 0, :] += np.where(ta < s.end, s(ta), 0.0)[:, None] * w[k]
+                out[:, 1, :] += np.where(tb > s.start, s(tb), 0.0)[:, None] * w[k]
+        return out
+
+    def _combine(self, values: dict[str, np.ndarray], n: int, mass: np.ndarray | None) -> np.ndarray:
+        p = np.empty((n, 3))
+        p[:] = self.constant
+        w = self.weights(mass)
+        for k, v in values.items():
+            for c in range(3):
+                if w[k][c] != 0.0:
+                    p[:, c] += w[k][c] * v
+        return p
+
+
+#: the signals that act on the body as external forces (not support motion)
+FORCE_SIGNALS = ("p1", "p2", "m3")
+
+
+@dataclass(frozen=True)
+class Element:
+    """One [[elements]] entry as the user wrote it; ``row`` is its row in the kernel arrays."""
+
+    x: tuple[float, float]  # attachment point relative to G, m
+    angle_deg: float
+    hysteresis: str
+    count: int
+    row: int
+    stroke: tuple[float, float] | None = None  # (lower, upper) deformation it can take, m
+
+
+@dataclass(frozen=True)
+class Damper:
+    """One [[dampers]] entry: a linear viscous damper along ``angle_deg`` at x (relative to G)."""
+
+    x: tuple[float, float]
+    angle_deg: float
+    c: float  # N s/m, each
+    count: int
+    b: tuple[float, float, float]  # its deformation is b . q (eqs. 5-8), its force acts back as b f
+
+
+@dataclass(frozen=True)
+class RayleighDamping:
+    """C = a0 M + a1 K0 from the damping ratios at two circular frequencies of the initial system."""
+
+    a0: float  # 1/s
+    a1: float  # s
+    frequencies_hz: tuple[float, float]  # where the ratios are met
+    ratios: tuple[float, float]
+    modes: tuple[int, int] | None  # the modes those are, when the deck named modes
+    mode_frequencies_hz: tuple[float, ...]  # every mode of (M, K0), ascending
+    matrix: np.ndarray  # (3, 3)
+
+    def ratio_at(self, f_hz) -> np.ndarray:
+        """zeta(omega) = a0 / (2 omega) + a1 omega / 2."""
+        w = 2.0 * np.pi * np.asarray(f_hz, dtype=float)
+        return self.a0 / (2.0 * w) + self.a1 * w / 2.0
+
+    def summary(self) -> dict:
+        return {"a0_1_s": self.a0, "a1_s": self.a1, "frequencies_hz": list(self.frequencies_hz),
+                "ratios": list(self.ratios), **({"modes": list(self.modes)} if self.modes else {}),
+                "mode_frequencies_hz": list(self.mode_frequencies_hz),
+                "mode_ratios": [float(z) for z in self.ratio_at(self.mode_frequencies_hz)],
+                "stiffness": "K0 = sum k0 b b^T, the initial system's (elements' k0)"}
+
+
+def mode_frequencies(mass: np.ndarray, k: np.ndarray) -> np.ndarray:
+    """Circular frequencies of M x'' + K x = 0 (M diagonal), ascending."""
+    s = 1.0 / np.sqrt(mass)
+    lam = np.linalg.eigvalsh(s[:, None] * k * s[None, :])
+    return np.sqrt(np.clip(lam, 0.0, None))
+
+
+def rayleigh_damping(spec: "dk.Rayleigh", mass: np.ndarray, k0: np.ndarray) -> RayleighDamping:
+    """a0, a1 from zeta_i = a0 / (2 w_i) + a1 w_i / 2 at the two frequencies (InputError naming
+    the deck key where they cannot be met)."""
+    w_modes = mode_frequencies(mass, k0)
+    f_modes = tuple(float(w / (2.0 * np.pi)) for w in w_modes)
+    if spec.modes is not None:
+        w = [w_modes[m - 1] for m in spec.modes]
+        bad = [m for m, x in zip(spec.modes, w) if not x > 1e-12 * max(w_modes.max(), 1e-300)]
+        if bad:
+            raise InputError(f"damping.rayleigh.modes: mode {bad[0]} of the initial system has no stiffness "
+                             "(zero frequency): give frequencies_hz")
+    else:
+        w = [2.0 * np.pi * f for f in spec.frequencies_hz]
+    z = spec.ratios
+    a = np.linalg.solve(np.array([[0.5 / w[0], 0.5 * w[0]], [0.5 / w[1], 0.5 * w[1]]]), np.array(z))
+    a0, a1 = float(a[0]), float(a[1])
+    if a0 < 0.0 or a1 < 0.0:
+        # two ratios too different for the frequencies between them: a negative coefficient
+        # would feed energy into some modes
+        key = "modes" if spec.modes is not None else "frequencies_hz"
+        raise InputError(f"damping.rayleigh.ratio: {list(z)} at {[round(x / (2 * np.pi), 6) for x in w]} Hz "
+                         f"(damping.rayleigh.{key}) needs a0 = {a0:.4g}, a1 = {a1:.4g}: a negative coefficient "
+                         "gives negative damping; bring the ratios closer")
+    matrix = a0 * np.diag(mass) + a1 * k0
+    return RayleighDamping(a0, a1, (float(w[0] / (2 * np.pi)), float(w[1] / (2 * np.pi))), tuple(map(float, z)),
+                           tuple(spec.modes) if spec.modes is not None else None, f_modes, matrix)
+
+
+@dataclass(frozen=True)
+class System:
+    """The rigid body on its elements: M q'' + R(q) = p(t), q = (u1, u2, theta3)."""
+
+    title: str
+    body: Body
+    mass: np.ndarray  # (3,) diag(m, m, J), J about the mass centre G
+    # kernel rows: elements with the same b and set deform alike and are evaluated once
+    bvec: np.ndarray  # (ne, 3) rows b_e = (cos a, sin a, x1 sin a - x2 cos a)
+    mult: np.ndarray  # (ne,) how many identical elements each row stands for
+    params: np.ndarray  # (ne, 2, 8) VRM sets
+    k0: np.ndarray  # (ne,) elastic stiffness of each element: the K0 of the structure-dependent methods
+    k_reversal: np.ndarray  # (ne,) stiffness at a reversal at u = 0 (the stiffest instant of a loop)
+    elements: tuple[Element, ...]
+    excitation: Excitation
+    notes: tuple[str, ...] = field(default=())
+    dampers: tuple[Damper, ...] = field(default=())
+    #: the weight m (g1, g2, 0) acting at G when the deck gives body.gravity
+    weight: np.ndarray | None = None
+    #: the static equilibrium under the weight (rbhyst.solve.static), once found: the run starts there
+    static: object | None = None
+    #: [damping.rayleigh]: C = a0 M + a1 K0, added to the dampers'
+    rayleigh: RayleighDamping | None = None
+
+    @property
+    def K0(self) -> np.ndarray:
+        """B diag(mult k0) B^T: the stiffness the structure-dependent methods are built on.
+
+        k0 is the slope of the limiting curves at u = 0 (kb + ke(0), the larger branch), the
+        stiffness an element returns to away from reversals. Measured on the seed scene, this
+        makes Chang's method 30x more accurate at dt = 1 ms than the reversal stiffness
+        k_a = kb + alpha (f0+ + f0-), whose large omega_0 h damps the displacement predictor.
+        Stability where the tangent exceeds K0 (at reversals, on stiffening branches) is kept
+        by the loop's stiffness monitor: omega_t h <= 0.5 < 2 for every method.
+        """
+        return (self.bvec.T * (self.mult * self.k0)) @ self.bvec
+
+    @property
+    def C(self) -> np.ndarray:
+        """Viscous damping matrix (3, 3): sum count c b b^T of the dampers, plus Rayleigh's (zeros without)."""
+        c = np.zeros((3, 3))
+        for dp in self.dampers:
+            b = np.asarray(dp.b)
+            c += dp.count * dp.c * np.outer(b, b)
+        if self.rayleigh is not None:
+            c += self.rayleigh.matrix
+        return c
+
+    @property
+    def damper_b(self) -> np.ndarray:
+        """(dampers, 3) each damper's b, count expanded (CSV order)."""
+        return np.array([dp.b for dp in self.dampers for _ in range(dp.count)]).reshape(-1, 3)
+
+    @property
+    def damper_c(self) -> np.ndarray:
+        return np.array([dp.c for dp in self.dampers for _ in range(dp.count)])
+
+    @property
+    def n_output_elements(self) -> int:
+        return int(self.mult.sum())
+
+    def expand(self, per_row: np.ndarray) -> np.ndarray:
+        """(n, rows) kernel data to (n, elements) in CSV order: deck order, ``count`` expanded."""
+        columns = [el.row for el in self.elements for _ in range(el.count)]
+        return per_row[:, columns]
+
+    def row_elements(self, row: int) -> list[int]:
+        """CSV numbers (1-based) of the elements that kernel row ``row`` stands for."""
+        out, k = [], 1
+        for el in self.elements:
+            if el.row == row:
+                out.extend(range(k, k + el.count))
+            k += el.count
+        return out
+
+
+def b_vector(x1: float, x2: float, angle_rad: float) -> np.ndarray:
+    """u_e = b . q for an element at (x1, x2) along angle a (eqs. 5-8 combined)."""
+    c, s = math.cos(angle_rad), math.sin(angle_rad)
+    return np.array([c, s, x1 * s - x2 * c])
+
+
+def free_directions(bvec: np.ndarray, body: Body) -> list[str]:
+    """Describe each rigid motion q != 0 with B^T q = 0: no element resists it."""
+    size = body.extent or 1.0
+    scaled = bvec * np.array([1.0, 1.0, 1.0 / size])  # rotation in m at the body's size
+    _, sv, vt = np.linalg.svd(scaled, full_matrices=True)
+    sv = np.concatenate([sv, np.zeros(3 - len(sv))])
+    out = []
+    for k in range(3):
+        if sv[k] > 1e-9 * max(sv[0], 1e-300):
+            continue
+        q = vt[k] * np.array([1.0, 1.0, 1.0 / size])
+        u1, u2, th = q
+        if abs(th) * size < 1e-9 * max(abs(u1), abs(u2)):
+            ang = math.degrees(math.atan2(u2, u1)) % 180.0
+            out.append(f"translation along {ang:.4g} deg from x1")
+        else:
+            c1, c2 = -u2 / th, u1 / th
+            if abs(c1) < 1e-9 * size and abs(c2) < 1e-9 * size:
+                out.append("rotation about the mass centre G")
+            else:
+                g = body.mass_centre  # the user's frame, not G's
+                out.append(f"rotation about the point ({c1 + g[0] + 0.0:.6g}, {c2 + g[1] + 0.0:.6g}) m")
+    return out
+
+
+#: an element attached farther from G than this many body sizes is worth a note
+FAR_ELEMENT = 3.0
+#: a body larger than this (m) is worth a note: were its vertices given in mm?
+LARGE_BODY_M = 50.0
+
+
+def implausible_geometry(body: Body, elements) -> list[str]:
+    """Notes on geometry that may be intended but is more often a slip: elements far from the body,
+    a body the size of a building (vertices in mm?)."""
+    notes = []
+    size = body.extent
+    g = body.mass_centre
+    if size > LARGE_BODY_M:
+        notes.append(f"body: it reaches {size:.4g} m from its mass centre: are the vertices in mm? "
+                     "(rbhyst takes every length in m)")
+    for k, el in enumerate(elements, start=1):
+        r = math.hypot(*el.x)
+        if r > FAR_ELEMENT * size:
+            notes.append(f"elements[{k}]: attached at ({el.x[0] + g[0]:.4g}, {el.x[1] + g[1]:.4g}) m, {r:.4g} m from "
+                         f"the mass centre: {r / size:.3g} times the body's size ({size:.4g} m)")
+    return notes
+
+
+def _signal(spec, scale_units: dict[str, float], base: Path,
+            notes: list[str]) -> tuple[Signal, float | None]:
+    """A callable of time in SI units and the signal's own end; what the run should say about
+    the signal goes to ``notes``."""
+    factor = scale_units[spec.units]
+    if isinstance(spec, dk.Sine):
+        s = signals.sine(spec.amplitude * factor, spec.frequency_hz, spec.phase_deg, spec.start, spec.cycles,
+                         spec.ramp_cycles)
+        return s, s.end
+    if isinstance(spec, dk.Pulse):
+        s = signals.Pulse(spec.type, spec.amplitude * factor, spec.duration, spec.start)
+        return s, s.end
+    path = Path(spec.file)
+    if not path.is_absolute():
+        path = base / path
+    record = read_record(path, spec.dt)
+    check_declared(record.declared, spec.units)  # the file's own word on its units must agree
+    notes.extend(record.notes)
+    series = Series(record.series.t0, record.series.dt, record.series.values * factor * spec.scale)
+    return series, series.duration
+
+
+def _excitation(deck: dk.Deck, base: Path, body: Body, notes: list[str]) -> Excitation:
+    ex = deck.excitation
+    if ex is None:
+        return Excitation()
+    sig: dict[str, Signal] = {}
+    durations = []
+    problems = []
+
+    def add(name, spec, units, loc):
+        if spec is None:
+            return
+        said: list[str] = []
+        try:
+            s, dur = _signal(spec, units, base, said)
+        except InputError as err:
+            problems.extend(f"{loc}: {p}" for p in err.problems)
+            return
+        notes.extend(f"{loc}: {n}" for n in said)
+        sig[name] = s
+        if dur is not None:
+            durations.append(dur)
+
+    if ex.support is not None:
+        add("ag1", ex.support.x1, dk.ACCEL_UNITS, "excitation.support.x1")
+        add("ag2", ex.support.x2, dk.ACCEL_UNITS, "excitation.support.x2")
+    point = (0.0, 0.0)
+    if ex.force is not None:
+        add("p1", ex.force.p1, dk.FORCE_UNITS, "excitation.force.p1")
+        add("p2", ex.force.p2, dk.FORCE_UNITS, "excitation.force.p2")
+        add("m3", ex.force.m3, dk.MOMENT_UNITS, "excitation.force.m3")
+        if ex.force.point is None:
+            if ex.force.p1 is not None or ex.force.p2 is not None:
+                g = body.mass_centre
+                notes.append(f"excitation.force.point is not given: p1 and p2 act at the mass centre G "
+                             f"({g[0]:.6g}, {g[1]:.6g}) m")
+        else:
+            # the point is given in the deck's frame; loads act about G
+            point = (ex.force.point[0] - body.mass_centre[0], ex.force.point[1] - body.mass_centre[1])
+    if problems:
+        raise InputError(problems)
+    return Excitation(
+        point=point,
+        duration=max(durations) if durations else None,
+        **sig,
+    )
+
+
+def assemble(deck: dk.Deck, base: Path) -> System:
+    """Build the System of a runnable deck; relative file paths resolve against ``base``."""
+    dk.check_runnable(deck)
+    body, notes = body_from_deck(deck.body)
+    mass = np.array([body.mass, body.mass, body.inertia])
+
+    sets = {name: hs.array() for name, hs in deck.hysteresis.items()}
+    k_rev, k_el = {}, {}
+    for name, p in sets.items():
+        k = reversal_stiffness(p, 0.0)
+        if not k > 0.0:
+            raise InputError(f"hysteresis.{name}: the stiffness at a reversal at u = 0 is {k:.6g} N/m; it must be > 0")
+        k_rev[name] = k
+        k_el[name] = max(float(limiting_slope(p, 1, 0.0)), float(limiting_slope(p, -1, 0.0)), 0.0)
+
+    # an element that deforms exactly like another with the same set shares its kernel row:
+    # the seed's shear isolators under P1 and P2 share b = (0, 1, x1)
+    xs, bs = [], []
+    for el in deck.elements:
+        x = body.vertex(el.part, el.vertex) if el.vertex is not None else np.asarray(el.point, float) - body.mass_centre
+        xs.append(x)
+        bs.append(b_vector(x[0], x[1], math.radians(el.angle_deg)))
+    b_all = np.array(bs)
+    key = np.round(b_all / 1e-12).astype(np.int64)  # equal where they round alike at 1e-12 (a pair split only costs time)
+    set_ids = {name: i for i, name in enumerate(deck.hysteresis)}
+    key = np.column_stack([key, [set_ids[el.hysteresis] for el in deck.elements]])
+    _, first, inverse = np.unique(key, axis=0, return_index=True, return_inverse=True)
+    inverse = inverse.ravel()
+    order = np.argsort(first)  # rows in the order of their first element
+    row_of = np.empty(len(first), dtype=int)
+    row_of[order] = np.arange(len(first))
+    rows = [b_all[first[k]] for k in order]
+    names = [deck.elements[first[k]].hysteresis for k in order]
+    mult = [0] * len(rows)
+    elements = []
+    for i, el in enumerate(deck.elements):
+        row = int(row_of[inverse[i]])
+        mult[row] += el.count
+        elements.append(Element((float(xs[i][0]), float(xs[i][1])), el.angle_deg, el.hysteresis, el.count, row,
+                                el.stroke_limits))
+    bvec = np.array(rows)
+    notes.extend(implausible_geometry(body, elements))
+    free = free_directions(bvec, body)
+    if free:
+        raise InputError(f"elements: the body is not restrained against {'; '.join(free)}")
+
+    excitation = _excitation(deck, base, body, notes)
+    dampers = []
+    for dp in deck.dampers or []:
+        x = body.vertex(dp.part, dp.vertex) if dp.vertex is not None else np.asarray(dp.point, float) - body.mass_centre
+        b = b_vector(x[0], x[1], math.radians(dp.angle_deg))
+        dampers.append(Damper((float(x[0]), float(x[1])), dp.angle_deg, dp.c, dp.count, tuple(map(float, b))))
+    rayleigh = None
+    if deck.damping is not None and deck.damping.rayleigh is not None:
+        k0 = (bvec.T * (np.array(mult, dtype=float) * np.array([k_el[n] for n in names]))) @ bvec
+        rayleigh = rayleigh_damping(deck.damping.rayleigh, mass, k0)
+    weight = None
+    if deck.body.gravity is not None:
+        weight = body.mass * np.array([deck.body.gravity[0], deck.body.gravity[1], 0.0])
+    return System(
+        title=deck.title or "",
+        body=body,
+        mass=mass,
+        bvec=bvec,
+        mult=np.array(mult, dtype=float),
+        params=np.array([sets[n] for n in names]),
+        k0=np.array([k_el[n] for n in names]),
+        k_reversal=np.array([k_rev[n] for n in names]),
+        elements=tuple(elements),
+        excitation=excitation,
+        notes=tuple(notes),
+        dampers=tuple(dampers),
+        weight=weight,
+        rayleigh=rayleigh,
+    )

@@ -1,0 +1,75 @@
+"""The analysis of a scene from start to end, without files: plan, solve, estimate, checks.
+What every run goes through (``rbhyst.run``, a sweep's case, a transmissibility block);
+:mod:`rbhyst.api` adds the output folder and the plots."""
+
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+from rbhyst.model.deck import ANALYSIS_SECTIONS, Deck, load_deck
+from rbhyst.model.settings import Settings, settings_from_deck
+from rbhyst.model.system import System, assemble
+from rbhyst.solve.result import Result
+
+
+def deck_of(deck: Deck | str | Path) -> Deck:
+    """A Deck, or the deck at a path, validated for a run."""
+    return deck if isinstance(deck, Deck) else load_deck(deck, need=ANALYSIS_SECTIONS)
+
+
+def scene(d: Deck, integrator: str | None = None, dt: float | None = None, tolerance: float | None = None,
+          estimate: bool | None = None) -> tuple[System, Settings]:
+    """A deck as the System it describes and the settings to run it with."""
+    settings = settings_from_deck(d, integrator=integrator, dt=dt, tolerance=tolerance)
+    if estimate is not None:
+        settings = dataclasses.replace(settings, estimate=estimate)
+    return assemble(d, d.base), settings
+
+
+def plan(system: System, settings: Settings):
+    """The stepping plan (rbhyst.solve.plan): what can fail before anything runs fails here."""
+    from rbhyst.solve.plan import prepare
+
+    if settings.tolerance is not None:
+        settings = dataclasses.replace(settings, integrator="adaptive")
+    return prepare(system, settings)
+
+
+def analyse(system: System, settings: Settings, keep: bool = True, csv=None, planned=None,
+            progress=None) -> Result:
+    """One run and its estimate, or (with a tolerance) the run that meets it; then its notes
+    and warnings. ``csv``: where the rows are streamed (rbhyst.solve.plan.Rows)."""
+    from rbhyst.results.checks import diagnose
+    from rbhyst.solve.estimate import estimate, meet_tolerance, warnings_for
+
+    if settings.tolerance is not None:
+        if progress is not None:
+            progress(0, 0, f"meeting the tolerance {settings.tolerance:g}")
+        result = meet_tolerance(system, settings, keep=keep, csv=csv)
+    else:
+        planned = planned or plan(system, settings)
+        if keep:
+            planned.check_size(keep=True)
+        result = planned.run(keep=keep, csv=csv, progress=progress)
+        if settings.estimate:
+            if progress is not None:
+                progress(0, 0, "estimating the error")
+            result.accuracy = estimate(result, settings)
+    result.notes, result.warnings = diagnose(result)
+    if result.spectra is not None:
+        from rbhyst.solve.located import unfinished_note
+
+        dampings, periods = settings.spectra
+        ends = [signal.end for signal in system.excitation.signals.values()]
+        end = max(ends) if ends and None not in ends else None  # (a sine without end never ends)
+        note = unfinished_note(end, result.steps * result.settings.dt, periods, dampings)
+        result.notes += [note] if note else []
+    result.warnings += warnings_for(result.accuracy, result.settings, result.stats)
+    return result
+
+
+def run_deck(deck, keep: bool = True, **options) -> Result:
+    """A deck's analysis in memory (``options``: integrator, dt, tolerance, estimate)."""
+    system, settings = scene(deck_of(deck), **options)
+    return analyse(system, settings, keep=keep)

@@ -1,0 +1,139 @@
+"""What a finished run says about itself: notes (information) and warnings (a result to doubt)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from rbhyst.solve.result import ENERGY_WARN, Result
+
+#: rotations above this (rad) leave the small-rotation kinematics of seed eqs. 7-8: a point at
+#: x from G moves by x theta to first order, and the neglected second-order terms (1 - cos
+#: theta) x ~ x theta^2 / 2 are theta / 2 of it: 2.5 % at 0.05 rad, beyond the 1 % accuracy
+#: rbhyst states for the integration itself
+ROTATION_WARN = 0.05
+
+
+def diagnose(result: Result) -> tuple[list[str], list[str]]:
+    """Notes and warnings of a run, in the words the command line prints."""
+    notes = list(result.system.notes)
+    warnings: list[str] = []
+    s, st = result.settings, result.stats
+    ex = result.system.excitation
+    t_end = st.steps * s.dt
+    if not ex.signals:
+        warnings.append("the deck has no excitation: the body stays at rest and every response is zero")
+    elif not ex.acts_before(t_end):
+        warnings.append(f"no excitation acts within the analysis (0 to {t_end:g} s): every response is zero")
+    if st.record_substeps > 1:
+        notes.append(f"the excitation is sampled finer than dt = {s.dt:g} s: {st.record_substeps} substeps per "
+                     "step follow it (output stays on dt)")
+    notes += unresolved_signals(result)
+    if st.substeps:
+        notes.append(f"{st.substeps} substeps (up to 2^{st.max_substep_level} per step) resolved stiff instants; "
+                     "see summary.json")
+    if result.energy_balance > ENERGY_WARN:
+        warnings.append(f"energy balance error {result.energy_balance:.2%} exceeds {ENERGY_WARN:.0%}: reduce dt")
+    e = result.extremes
+    theta = e.peak("theta3_rad")
+    if theta > ROTATION_WARN:
+        i = e.names.index("theta3_rad")
+        t = e.t_max[i] if abs(e.max[i]) >= abs(e.min[i]) else e.t_min[i]
+        warnings.append(f"the rotation reaches {theta:.3g} rad at t = {t:.4g} s, beyond the small rotations of the "
+                        f"seed's kinematics (eqs. 7-8, about {theta / 2:.1%} error in point motions; rbhyst warns "
+                        f"above {ROTATION_WARN:g} rad)")
+    warnings += stroke_warnings(result)
+    if result.system.static is not None:
+        more_notes, more_warnings = gravity_checks(result)
+        notes += more_notes
+        warnings += more_warnings
+    return notes, warnings
+
+
+#: the standard acceleration of gravity (m/s2) and how far a deck's may differ from it unremarked
+STANDARD_GRAVITY = 9.80665
+GRAVITY_SPREAD = 0.05
+
+
+def gravity_checks(result: Result) -> tuple[list[str], list[str]]:
+    """The static preload (a note), and warnings where gravity or its deflection is implausible: a
+    g far from the standard one (mm/s2 for m/s2?), a static deflection beyond the body's size or
+    the seed's small rotations, an element beyond its stroke before anything moves."""
+    system = result.system
+    st = system.static
+    w = system.weight
+    g = np.asarray(w[:2], dtype=float) / system.body.mass
+    gmag = float(np.hypot(*g))
+    size = system.body.extent
+    notes = [f"body.gravity: the weight {float(np.hypot(*w[:2])):.6g} N rests on the elements at u1 = {st.q[0]:.4g} m, "
+             f"u2 = {st.q[1]:.4g} m, theta3 = {st.q[2]:.4g} rad (the static preload; time_history.csv is measured "
+             "from there)"]
+    warnings = []
+    if gmag > 0 and abs(gmag / STANDARD_GRAVITY - 1.0) > GRAVITY_SPREAD:
+        warnings.append(f"body.gravity: |g| = {gmag:.6g} m/s2 is {gmag / STANDARD_GRAVITY:.4g} times the standard "
+                        f"{STANDARD_GRAVITY} m/s2 (rbhyst takes it in m/s2: was it given in mm/s2 or cm/s2?)")
+    shift = float(np.hypot(st.q[0], st.q[1]))
+    if shift > size or abs(st.q[2]) > ROTATION_WARN:
+        warnings.append(f"body.gravity: the static deflection under the weight is {shift:.4g} m and {abs(st.q[2]):.4g} rad, "
+                        f"against a body of {size:.4g} m: beyond what the elements' sets and the seed's small "
+                        "rotations describe; check body.gravity, body.mass and the sets' stiffness")
+    u = system.expand(st.st[None, :, 0])[0]
+    k = 0
+    for el in system.elements:
+        if el.stroke is not None:
+            lo, hi = el.stroke
+            for j in range(el.count):
+                if not lo <= u[k + j] <= hi:
+                    warnings.append(f"element e{k + j + 1} ({el.hysteresis!r}) is beyond its stroke under the weight "
+                                    f"alone: {u[k + j]:.4g} m against [{lo:g}, {hi:g}] m")
+        k += el.count
+    return notes, warnings
+
+
+#: rows of dt per sine period or pulse duration below which the rows cannot show the response
+ROWS_PER_FEATURE = 10
+
+
+def unresolved_signals(result: Result) -> list[str]:
+    """Analytic signals too fast for the output's dt: the integration follows them (substeps), the
+    spectra see every compute step, but the rows, and the peaks taken over them, sample at dt."""
+    from rbhyst.model.signals import Pulse
+
+    s = result.settings
+    t_end = result.stats.steps * s.dt
+    fast: dict[tuple[str, float], list[str]] = {}
+    for key, signal in result.system.excitation.signals.items():
+        if not hasattr(signal, "breakpoints") or not signal.acts_before(t_end):
+            continue  # (records: their own note)
+        feature, what = ((signal.duration, f"a {signal.duration:.4g} s {signal.kind} pulse") if isinstance(signal, Pulse)
+                         else (2 * math.pi / signal.omega, f"a {signal.omega / (2 * math.pi):.4g} Hz sine"))
+        if feature / s.dt < ROWS_PER_FEATURE:
+            fast.setdefault((what, feature), []).append(SIGNAL_KEYS[key])
+    return [f"{', '.join(keys)}: {what} spans {feature / s.dt:.2g} rows of dt = {s.dt:g} s: the integration "
+            f"follows it and the spectra see every compute step, but time_history.csv and the peaks show the "
+            f"response at dt only, missing what happens between rows; dt = {feature / ROWS_PER_FEATURE:.3g} s "
+            f"({ROWS_PER_FEATURE} rows) would show it" for (what, feature), keys in fast.items()]
+
+
+#: a signal's place in the deck
+SIGNAL_KEYS = {"ag1": "excitation.support.x1", "ag2": "excitation.support.x2", "p1": "excitation.force.p1",
+               "p2": "excitation.force.p2", "m3": "excitation.force.m3"}
+
+
+def stroke_warnings(result: Result) -> list[str]:
+    """An element beyond its stroke: which, how far, when."""
+    from rbhyst.solve.result import stroke_use
+
+    out, k = [], 1
+    for el in result.system.elements:
+        if el.stroke is not None:
+            use = stroke_use(result.extremes, f"e{k}_u_m", el.stroke)
+            if use["utilization"] > 1.0:
+                span = f"e{k}" if el.count == 1 else f"e{k}-e{k + el.count - 1}"
+                out.append(f"element {span} ({el.hysteresis!r}) goes beyond its stroke: {use['peak_deformation_m']:.4g} m "
+                           f"at t = {use['time_of_peak_s']:.4g} s against a limit of "
+                           f"{el.stroke[1] if use['peak_deformation_m'] > 0 else el.stroke[0]:g} m "
+                           f"({use['utilization']:.0%} of it)")
+        k += el.count
+    return out

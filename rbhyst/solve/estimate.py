@@ -1,0 +1,385 @@
+"""How accurate a run is, and runs that meet an accuracy asked for.
+
+The error of a history is measured as ``study`` measures it, max_t |x - x_exact| / max_t
+|x_exact|, for every output an engineer reads: u1, u2, theta3, the total accelerations, the
+mounts' resultant, each element's force, each point's motion (history.estimate_columns), and
+the body's response spectra (their largest difference over periods and dampings). It is
+estimated against the event-located adaptive integration (rbhyst.solve.integrators.reference):
+between reversals the equation of motion is smooth, every reversal is located as an event and
+the load is followed exactly, so its only error is the Runge-Kutta pair's, controlled by rtol;
+its accelerations come from the same equation of motion as the run's (history.Layout). Two solutions, at REFERENCE_RTOL and
+100 times looser, say how well the scene's history is determined at all:
+
+- their difference (the *spread*) falls about a hundredfold per hundredfold of rtol on an
+  ordinary scene (1e-5 to 1e-8 on the sample decks), and the run's error is then its distance
+  from the tighter one: honest in both directions, since that solution is some thousand times
+  more accurate than any run worth reporting;
+- on a sensitive scene (sharp yield driven near a bifurcation, rotations that decide which
+  elements yield) the two differ by as much as the run itself: no step size determines the
+  history, and the estimate says so (status "sensitive") with the spread of the peaks, which
+  may still be stable.
+
+Fixed-step methods win on cost where reversals are many (each is an adaptive step); past a
+budget of adaptive steps the estimate falls back to halving the run's step (status
+"step-halving"), which assumes the method's order and is less trustworthy on hysteretic
+scenes, and says so.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import time
+
+import numpy as np
+
+from rbhyst.errors import AnalysisError
+from rbhyst.solve.history import estimate_columns
+from rbhyst.model.system import System
+from rbhyst.solve.static import at_rest_under_gravity
+
+#: the estimator's adaptive solution, and the check of how well it is determined (x 100 looser)
+REFERENCE_RTOL = 1e-9
+CHECK_FACTOR = 100.0
+#: adaptive steps the estimate may take per step of the run before it halves the step instead
+STEP_BUDGET = 400
+#: tolerance mode: the adaptive rtol tried first is the tolerance times this (its error is some
+#: 100-300 rtol on the sample decks and cases), then 100 times tighter until met or RTOL_MIN
+RTOL_PER_TOL = 1e-3
+RTOL_MIN = 1e-13
+COORDINATES = ("u1", "u2", "theta3")
+#: a column whose reference stays below this fraction of its family's scale is at rest: its error
+#: is measured against the family's scale (the rotation of a symmetric scene, a cross acceleration)
+AT_REST = 1e-9
+#: the spectra's error is estimated on runs of at most this many compute steps (the reference
+#: is then computed at each of them, as the run's spectra were driven)
+SPECTRA_ROWS = 500_000
+#: a warning names at most this many quantities beside the worst (then "and k more")
+WARN_NAMES = 8
+
+
+def relative_errors(d: np.ndarray, d_ref: np.ndarray, system: System) -> tuple[float, float, float]:
+    """max_t |q - q_ref| / max_t |q_ref| per coordinate u1, u2, theta3 (``study``'s measure)."""
+    return tuple(float(x) for x in column_errors(d, d_ref, ["u1", "u2", "theta3"], ["d", "d", "d"], system))
+
+
+def _to_length(key: str, system: System) -> float:
+    """What turns a column into its family's translational measure: the radius of gyration for a
+    rotation or angular acceleration, its inverse for a moment."""
+    rg = math.sqrt(system.mass[2] / system.mass[0])
+    if key in ("theta3", "alphat3"):
+        return rg
+    return 1.0 / rg if key == "R3" else 1.0
+
+
+def column_errors(values: np.ndarray, ref: np.ndarray, keys, families, system: System) -> np.ndarray:
+    """max_t |x - x_ref| / max_t |x_ref| for every column.
+
+    A column the reference leaves at rest (below AT_REST of its family: the rotation of a
+    symmetric scene, the cross acceleration of a symmetric body) is measured against its
+    family's scale instead: the largest of the family's peaks, a rotation counted at the
+    radius of gyration, a moment over it.
+    """
+    diff = np.max(np.abs(values - ref), axis=0)
+    peak = np.max(np.abs(ref), axis=0)
+    length = np.array([_to_length(k, system) for k in keys])
+    families = np.asarray(families)
+    scale = np.empty(len(keys))
+    for fam in np.unique(families):
+        mine = families == fam
+        scale[mine] = np.max(peak[mine] * length[mine]) / length[mine]
+    denom = np.where(peak > AT_REST * scale, peak, scale)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(denom > 0, diff / denom, np.where(diff > 0, np.inf, 0.0))
+
+
+def _peak_spread(keys, *histories: np.ndarray) -> dict[str, float]:
+    """The largest relative difference between the peaks |x| of several histories, per column."""
+    peaks = np.array([np.max(np.abs(h), axis=0) for h in histories])
+    top = np.max(peaks, axis=0)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        spread = np.where(top > 0, (np.max(peaks, axis=0) - np.min(peaks, axis=0)) / top, 0.0)
+    return dict(zip(keys, map(float, spread)))
+
+
+class Estimator:
+    """Adaptive solutions of one scene at one set of times, computed once and reused (a study
+    compares many runs with the same ones), and the columns of a run's table they give
+    (history.estimate_columns of ``layout``)."""
+
+    def __init__(self, system: System, t: np.ndarray, max_steps: int | None = None, layout=None,
+                 t_end: float | None = None):
+        """t: the times compared (from 0); t_end: the end of the analysis, if later."""
+        from rbhyst.solve.integrators import reference
+
+        self.system = system
+        self.t = np.asarray(t, dtype=float)
+        self.t_end = max(float(self.t[-1]), t_end or 0.0)
+        self.max_steps = max_steps if max_steps is not None else reference.MAX_STEPS
+        self.layout = layout
+        self._pieces = None
+        self._solutions: dict[tuple[float, int], object] = {}
+        self.wall_s = 0.0
+
+    def solution(self, rtol: float, t: np.ndarray | None = None):
+        """The adaptive solution at ``rtol``, at self.t (or the times t, from 0)."""
+        from rbhyst.solve.integrators import reference
+
+        times = self.t if t is None else t
+        key = (rtol, len(times), float(times[-1]))
+        if key not in self._solutions:
+            tic = time.perf_counter()
+            if self._pieces is None:
+                self._pieces = reference.load_pieces(self.system, self.t_end)
+            try:
+                self._solutions[key] = reference.integrate(self.system, times, rtol, pieces=self._pieces,
+                                                           max_steps=self.max_steps)
+            finally:
+                self.wall_s += time.perf_counter() - tic
+        return self._solutions[key]
+
+    @property
+    def columns(self) -> list[tuple[str, int, str]]:
+        return estimate_columns(self.layout)
+
+    def values(self, rtol: float) -> np.ndarray:
+        """(len(self.t), k) the estimate's columns of the adaptive solution at ``rtol``."""
+        raw = self.solution(rtol).raw(self.system)
+        return self.layout.table(raw)[:, [c for _, c, _ in self.columns]]
+
+    def assess(self, values: np.ndarray, rtol: float = REFERENCE_RTOL, check: float | None = None) -> dict:
+        """The error of ``values`` (the estimate's columns at self.t) against the solution at
+        rtol; how determined that one is against the one at ``check`` (default rtol x CHECK_FACTOR)."""
+        check = check if check is not None else rtol * CHECK_FACTOR
+        keys = [k for k, _, _ in self.columns]
+        families = [f for _, _, f in self.columns]
+        tight = self.values(rtol)
+        loose = self.values(check)
+        err = column_errors(values, tight, keys, families, self.system)
+        spread = column_errors(loose, tight, keys, families, self.system)
+        sol = self.solution(rtol)
+        return {
+            "estimated_error": dict(zip(keys, map(float, err))),
+            "reference_spread": dict(zip(keys, map(float, spread))),
+            "peaks_spread": _peak_spread(keys, values, tight, loose),
+            "reference": {"rtol": float(f"{rtol:.6g}"), "check_rtol": float(f"{check:.6g}"),
+                          "steps": sol.stats["steps"], "reversals": sol.stats["reversals"]},
+        }
+
+
+def estimate(result, settings) -> dict:
+    """summary.json's ``accuracy`` for a finished run (see the module docstring)."""
+    system = result.system
+    t, values = result.compared[:, 0], result.compared[:, 1:]
+    tic = time.perf_counter()
+    budget = STEP_BUDGET * max(result.stats.steps, 1)
+    est = Estimator(system, t, max_steps=budget, layout=result.layout, t_end=result.stats.steps * settings.dt)
+    adaptive = result.solver is not None
+    rtol = result.solver["rtol"] / CHECK_FACTOR if adaptive else REFERENCE_RTOL
+    try:
+        if adaptive:
+            # the run is itself the adaptive solution at settings.rtol: against one 100 times tighter
+            out = est.assess(values, rtol=rtol, check=result.solver["rtol"])
+            out["method"] = (f"against the event-located adaptive solution at rtol {rtol:g} "
+                             "(100 times tighter than the run's)")
+        else:
+            out = est.assess(values)
+            out["method"] = (f"against the event-located adaptive solution (DOP853, every reversal an event) at "
+                             f"rtol {REFERENCE_RTOL:g}, itself checked against rtol {REFERENCE_RTOL * CHECK_FACTOR:g}")
+    except AnalysisError as err:
+        from rbhyst.solve.integrators.reference import TooManySteps
+
+        if adaptive or not isinstance(err, TooManySteps):
+            return {"estimated_error": None, "tolerance": settings.tolerance, "status": "unavailable",
+                    "method": f"the adaptive solution failed: {err}", "wall_s": time.perf_counter() - tic}
+        out = _halving(result, settings)
+        out["why"] = f"the adaptive solution needs more than {budget} steps ({STEP_BUDGET} per step of the run)"
+    else:
+        _add_spectra_errors(out, result, est, rtol)
+    _settle_status(out, settings)
+    out["tolerance"] = settings.tolerance
+    out["compared_steps"] = int(len(t))
+    out["compared_every"] = int(result.compare_every)
+    out["wall_s"] = time.perf_counter() - tic
+    return out
+
+
+def _settle_status(out: dict, settings) -> None:
+    """'sensitive' where the two adaptive solutions differ by more than warn_error, else 'estimated'
+    (an error never below the reference's own spread)."""
+    spread = max(out.get("reference_spread", {}).values(), default=0.0)
+    worst = max(out["estimated_error"].values())
+    if "status" not in out:
+        out["status"] = "sensitive" if spread > settings.warn_error else "estimated"
+        if out["status"] == "estimated" and spread > worst:
+            # the run cannot be measured closer than the reference is determined
+            out["estimated_error"] = {k: max(v, out["reference_spread"].get(k, 0.0))
+                                      for k, v in out["estimated_error"].items()}
+
+
+def _add_spectra_errors(out: dict, result, est: Estimator, rtol: float) -> None:
+    """The error of every spectrum of the body (G and the points; the ground's comes from its
+    signal, not from the integration), as the largest difference of sa from the reference's
+    spectrum over periods and dampings, relative to the reference's peak: ``sa_<location>_<direction>``."""
+    if result.spectra is None:
+        return
+    from rbhyst.solve.located import SpectraSink
+    from rbhyst.solve.plan import compute_times
+
+    s = result.settings
+    bounds, substeps = result.system.excitation.substeps(s.dt, result.stats.steps)
+    times = np.concatenate([[0.0], compute_times(bounds, substeps, s.dt)])
+    if len(times) > SPECTRA_ROWS:
+        out["spectra"] = f"not estimated: {len(times)} compute steps (more than {SPECTRA_ROWS})"
+        return
+    from rbhyst.solve.history import body_spectrum_columns
+
+    located = body_spectrum_columns(result.layout)
+    raw = est.solution(rtol, times).raw(result.system)
+    sink = SpectraSink([label for label, _ in located], *s.spectra, dt=s.dt)
+    columns = [c for _, c in located]
+    sink.update(result.layout.table(raw.slice(0, 1))[:, columns])
+    i = 1
+    for lo, hi, nsub in zip(bounds[:-1], bounds[1:], substeps):
+        n = int(hi - lo) * int(nsub)
+        for k in range(i, i + n, 65_536):
+            part = raw.slice(k, min(k + 65_536, i + n))
+            sink.update(result.layout.table(part)[:, columns], s.dt / int(nsub))
+        i += n
+    ref = sink.result()
+    for loc, direction in ref.signals:
+        mine, theirs = result.spectra.sa(loc, direction), ref.sa(loc, direction)
+        top = float(np.max(theirs))
+        err = float(np.max(np.abs(mine - theirs))) / top if top > 0 else 0.0
+        out["estimated_error"][f"sa_{loc}_{direction}"] = err
+
+
+def _halving(result, settings) -> dict:
+    """The run again at dt/2: error ~ |x_h - x_h/2| 2^p / (2^p - 1) with the method's order p,
+    at the same steps (every second one of the finer run)."""
+    from rbhyst.solve import integrators
+    from rbhyst.solve.plan import prepare
+
+    order = integrators.get(settings.integrator).order
+    half = prepare(result.system, dataclasses.replace(settings, dt=settings.dt / 2, every=1)).run(
+        keep=False, compare_every=2 * result.compare_every)
+    n = min(len(result.compared), len(half.compared))
+    cols = estimate_columns(result.layout)
+    keys, families = [k for k, _, _ in cols], [f for _, _, f in cols]
+    diff = column_errors(result.compared[:n, 1:], half.compared[:n, 1:], keys, families, result.system)
+    factor = 2.0**order / (2.0**order - 1.0)
+    return {"estimated_error": dict(zip(keys, (float(factor * d) for d in diff))), "status": "step-halving",
+            "method": f"step halving: |x(dt) - x(dt/2)| x 2^p/(2^p - 1), p = {order} (convergence on hysteretic "
+                      "scenes is irregular: this can be optimistic)"}
+
+
+def warnings_for(accuracy: dict, settings, stats=None) -> list[str]:
+    """The warnings an estimate calls for, with what would do. ``stats`` (the run's RunStats):
+    where the stiffness monitor already split the steps, the error belongs to the split step,
+    and the dt that would do is scaled from that."""
+    if accuracy is None:
+        return []
+    if accuracy["status"] == "unavailable":
+        return [f"the error could not be estimated: {accuracy['method']}"]
+    err = accuracy["estimated_error"]
+    name, worst = max(err.items(), key=lambda kv: kv[1])
+    out = []
+    if accuracy["status"] == "sensitive":
+        spread = max(accuracy["reference_spread"].values())
+        peaks = max(accuracy["peaks_spread"].values())
+        out.append(f"the history is sensitive: adaptive solutions at rtol {accuracy['reference']['check_rtol']:g} "
+                   f"and {accuracy['reference']['rtol']:g} differ by {spread:.1%}, so no step size determines it to "
+                   f"{settings.warn_error:.0%}; report the peaks (they differ by {peaks:.1%} between the run and "
+                   "both), not the history")
+    elif worst > settings.warn_error:
+        hint = ""
+        if settings.integrator != "adaptive":
+            step = settings.dt  # the compute step the error belongs to, where the run split dt
+            if stats is not None:
+                step = settings.dt / stats.record_substeps / 2**stats.max_substep_level
+            dt = step * 0.7 * (settings.warn_error / worst) ** 0.5
+            hint = f"; dt = {dt:.3g} s, --integrator adaptive, or --tolerance {settings.warn_error:g} would do"
+        else:
+            hint = f"; --tolerance {settings.warn_error:g} would do"
+        over = sorted(((v, k) for k, v in err.items() if v > settings.warn_error and k != name), reverse=True)
+        also = ", ".join(f"{k} {v:.2%}" for v, k in over[:WARN_NAMES])
+        also += f" and {len(over) - WARN_NAMES} more" if len(over) > WARN_NAMES else ""
+        also = f" (also {also})" if also else ""
+        out.append(f"estimated error {worst:.2%} in {name}{also} exceeds analysis.warn_error = "
+                   f"{settings.warn_error:.0%}{hint}")
+    return out
+
+
+def meet_tolerance(system: System, settings, keep: bool = True, csv=None):
+    """The run whose estimated error (largest over the estimate's columns: displacements, total
+    accelerations, resultant, element forces, points) is at most settings.tolerance.
+
+    The adaptive integration first, at rtol = tolerance x RTOL_PER_TOL, then 100 times tighter
+    while the estimate exceeds the tolerance (each attempt's check is the next's answer, computed
+    once); where reversals are so many that it exceeds its step budget, the deck's fixed-step
+    method at dt, dt/2, dt/4 ... with step-halving estimates. The output stays on the deck's dt.
+    An AnalysisError (exit 3) says what was reached where neither meets it.
+    """
+    from rbhyst.solve.history import Layout
+    from rbhyst.solve.integrators.reference import TooManySteps
+    from rbhyst.solve.plan import COMPARE_VALUES, output_steps, prepare
+
+    tol = settings.tolerance
+    system = at_rest_under_gravity(system)
+    n_steps = output_steps(system, settings)
+    layout = Layout(system, settings.points)
+    stride = max(1, -(-(n_steps + 1) * (1 + len(estimate_columns(layout))) // COMPARE_VALUES))
+    t = settings.dt * np.arange(n_steps + 1)
+    est = Estimator(system, t[::stride], max_steps=STEP_BUDGET * max(n_steps, 1), layout=layout,
+                    t_end=n_steps * settings.dt)
+    rtol = min(1e-6, max(RTOL_MIN, tol * RTOL_PER_TOL))
+    reached = None
+    tic = time.perf_counter()
+    try:
+        while rtol >= RTOL_MIN:
+            s = dataclasses.replace(settings, integrator="adaptive", rtol=rtol)
+            acc = est.assess(est.values(rtol), rtol=rtol / CHECK_FACTOR, check=rtol)
+            worst = max(acc["estimated_error"].values())
+            spread_peaks = max(acc["peaks_spread"].values())
+            reached = (worst, rtol)
+            if worst <= tol:
+                result = prepare(system, s).run(keep=keep, csv=csv)
+                _add_spectra_errors(acc, result, est, rtol / CHECK_FACTOR)
+                acc.update(status="estimated", tolerance=tol, wall_s=est.wall_s,
+                           method=f"tolerance {tol:g}: the adaptive integration at rtol {rtol:g}, measured against "
+                                  f"rtol {rtol / CHECK_FACTOR:g}", compared_steps=int(len(est.t)))
+                result.accuracy = acc
+                return result
+            rtol /= CHECK_FACTOR
+    except TooManySteps:
+        return _ladder(system, settings, keep, csv, tic)
+    worst, rtol = reached
+    raise AnalysisError(
+        f"tolerance {tol:g} not met: the adaptive integration reached {worst:.3g} at rtol {rtol:g} and does not "
+        f"converge further (peaks differ by {spread_peaks:.2%}): the scene's history is sensitive to round-off; "
+        f"a tolerance above {worst:.2g} can be met, or report the peaks")
+
+
+#: the fixed-step ladder of tolerance mode halves dt at most this many times
+LADDER_HALVINGS = 8
+
+
+def _ladder(system: System, settings, keep, csv, tic):
+    from rbhyst.solve.plan import prepare
+
+    tol = settings.tolerance
+    worst = math.inf
+    for k in range(LADDER_HALVINGS + 1):
+        s = dataclasses.replace(settings, dt=settings.dt / 2**k, every=settings.every * 2**k)
+        result = prepare(system, s).run(keep=keep, csv=csv)
+        acc = _halving(result, s)
+        worst = max(acc["estimated_error"].values())
+        if worst <= tol:
+            acc.update(tolerance=tol, wall_s=time.perf_counter() - tic,
+                       why="the adaptive integration exceeds its step budget on this scene (many reversals)",
+                       compared_steps=int(len(result.compared)))
+            result.accuracy = acc
+            return result
+    raise AnalysisError(f"tolerance {tol:g} not met: {settings.integrator} at dt = {settings.dt / 2**LADDER_HALVINGS:.3g} s "
+                        f"reached {worst:.3g} (the adaptive integration exceeds its step budget here); "
+                        "ask for a looser tolerance or a smaller analysis.dt")

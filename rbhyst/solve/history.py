@@ -1,0 +1,269 @@
+"""The time-history table of a run, built chunk by chunk from what an integrator computes.
+
+An integrator hands over :class:`Raw` chunks (the state at every step of dt); a
+:class:`Layout` turns each into rows of time_history.csv's columns; :class:`Extremes` and
+:class:`PlotData` reduce every row as it passes, so that peaks, extremes and plots see
+every computed step whatever ``output.every`` keeps, and a run of any length needs one
+chunk in memory.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from rbhyst.model.points import POINT_COLUMNS, point_columns, point_motion
+
+BASE_COLUMNS = (
+    "time_s", "u1_m", "u2_m", "theta3_rad", "v1_m_s", "v2_m_s", "omega3_rad_s",
+    "a1_m_s2", "a2_m_s2", "alpha3_rad_s2", "at1_m_s2", "at2_m_s2", "alphat3_rad_s2",
+)
+SUPPORT_COLUMNS = ("ag1_m_s2", "ag2_m_s2")
+RESULTANT_COLUMNS = ("R1_N", "R2_N", "R3_Nm")
+ENERGY_COLUMNS = ("E_input_J", "E_kinetic_J", "E_hysteretic_J", "E_error_J")
+VISCOUS_COLUMN = "E_viscous_J"
+
+
+@dataclass
+class Raw:
+    """What an integrator computed at consecutive steps: times (n,), displacements and
+    velocities (n, 3) each, element rows' deformation and force (n, rows), cumulative
+    energies (n, 4): input, kinetic, hysteretic, viscous. Accelerations are not an
+    integrator's to report: :class:`Layout` takes them from the equation of motion."""
+
+    t: np.ndarray
+    d: np.ndarray
+    v: np.ndarray
+    u: np.ndarray
+    f: np.ndarray
+    e: np.ndarray
+
+    def slice(self, start: int, stop: int) -> "Raw":
+        """Rows start..stop-1."""
+        return Raw(*(getattr(self, k)[start:stop] for k in ("t", "d", "v", "u", "f", "e")))
+
+
+class Layout:
+    """Which columns a scene's table has and how a Raw chunk becomes rows of them."""
+
+    def __init__(self, system, points=()):
+        """points: (name, (x1, x2) in the deck's frame) of each point of interest (output.points)."""
+        self.system = system
+        ex = system.excitation
+        self.has_support = ex.has_support
+        self.dampers = bool(system.dampers)  # their columns
+        # viscous work (and C v in the accelerations) with dampers or Rayleigh damping
+        self.damped = self.dampers or getattr(system, "rayleigh", None) is not None
+        names = list(BASE_COLUMNS)
+        self.slices: dict[str, slice] = {"d": slice(1, 4), "v": slice(4, 7), "a": slice(7, 10), "at": slice(10, 13)}
+        if self.has_support:
+            self.slices["ag"] = slice(len(names), len(names) + 2)
+            names += SUPPORT_COLUMNS
+        self.slices["R"] = slice(len(names), len(names) + 3)
+        names += RESULTANT_COLUMNS
+        g = np.asarray(system.body.mass_centre, dtype=float)
+        self.points = tuple((name, np.asarray(p, dtype=float) - g) for name, p in points)  # x from G
+        self.slices["points"] = slice(len(names), len(names) + len(POINT_COLUMNS) * len(self.points))
+        for name, _ in self.points:
+            names += point_columns(name)
+        n_el = system.n_output_elements
+        self.slices["elements"] = slice(len(names), len(names) + 2 * n_el)
+        for k in range(1, n_el + 1):
+            names += [f"e{k}_u_m", f"e{k}_f_N"]
+        if self.dampers:
+            n_d = len(system.damper_c)
+            self.slices["dampers"] = slice(len(names), len(names) + 2 * n_d)
+            for k in range(1, n_d + 1):
+                names += [f"d{k}_v_m_s", f"d{k}_f_N"]
+            self._db = system.damper_b.T.copy()  # (3, dampers): deformation rates v . b
+            self._dc = system.damper_c
+        # displacements are measured from the static equilibrium under gravity (seed section 2.2)
+        self.origin = np.zeros(3) if getattr(system, "static", None) is None else system.static.q
+        energy = list(ENERGY_COLUMNS)
+        if self.damped:
+            energy.insert(3, VISCOUS_COLUMN)
+        self.slices["energy"] = slice(len(names), len(names) + len(energy))
+        names += energy
+        self.names = tuple(names)
+        self._expand = np.array([el.row for el in system.elements for _ in range(el.count)], dtype=int)
+        self._rb = system.bvec * system.mult[:, None]  # rows' share of R = sum mult b f
+        self._minv = 1.0 / np.asarray(system.mass, dtype=float)
+        self._ct = system.C.T.copy() if self.damped else None
+
+    def index(self, name: str) -> int:
+        return self.names.index(name)
+
+    def table(self, raw: Raw, out: np.ndarray | None = None) -> np.ndarray:
+        """Rows of the table for a chunk (every computed step of it), into ``out`` if given
+        (n rows; column-major is fastest)."""
+        n = len(raw.t)
+        if out is None:
+            out = np.empty((len(self.names), n)).T  # column by column: each written contiguously
+        out[:, 0] = raw.t
+        out[:, 1:4] = raw.d - self.origin
+        out[:, 4:7] = raw.v
+        r = out[:, self.slices["R"]]
+        r[:] = raw.f @ self._rb
+        # the total acceleration from the equation of motion at the row's own state and time:
+        # M at = p(t) - R - C v (the elements and dampers see only the relative motion, so it is
+        # continuous where the support acceleration jumps; a jump of an external force: the row
+        # holds the force's value on its span). Not the integrator's own acceleration, which
+        # near a jump or a kink carries the load averaged over a step.
+        at = out[:, 10:13]
+        at[:] = self.system.excitation.forces(raw.t) - r
+        if self.damped:
+            at -= raw.v @ self._ct
+        at *= self._minv
+        out[:, 7:10] = at
+        if self.has_support:
+            ag = self.system.excitation.support(raw.t)
+            out[:, 7:9] -= ag
+            out[:, self.slices["ag"]] = ag
+        first = self.slices["points"].start
+        for k, (_, x) in enumerate(self.points):
+            c = first + len(POINT_COLUMNS) * k
+            point_motion(out[:, 1:4], out[:, 10:13], x, out=out[:, c:c + len(POINT_COLUMNS)])
+        el = self.slices["elements"]
+        out[:, el.start:el.stop:2] = raw.u[:, self._expand]
+        out[:, el.start + 1:el.stop:2] = raw.f[:, self._expand]
+        if self.dampers:
+            dv = raw.v @ self._db
+            ds = self.slices["dampers"]
+            out[:, ds.start:ds.stop:2] = dv
+            out[:, ds.start + 1:ds.stop:2] = dv * self._dc
+        en = self.slices["energy"]
+        out[:, en.start:en.start + 3] = raw.e[:, :3]
+        error = raw.e[:, 0] - raw.e[:, 1] - raw.e[:, 2]
+        if self.damped:
+            out[:, en.start + 3] = raw.e[:, 3]
+            error = error - raw.e[:, 3]
+        out[:, en.stop - 1] = error
+        return out
+
+
+def body_spectrum_columns(layout: Layout) -> list[tuple[tuple[str, str], int]]:
+    """((location, direction), column) of every total acceleration of the body whose spectra a
+    run gives: G and every point along x1 and x2 (the ground's come from its signals)."""
+    from rbhyst.solve.located import CENTRE
+
+    out = [((CENTRE, f"x{k}"), layout.index(f"at{k}_m_s2")) for k in (1, 2)]
+    for name, _ in layout.points:
+        out += [((name, f"x{k}"), layout.index(f"{name}_at{k}_m_s2")) for k in (1, 2)]
+    return out
+
+
+@dataclass
+class Extremes:
+    """Signed extremes of every column and the first times they are reached, over every row seen."""
+
+    names: tuple[str, ...]
+    max: np.ndarray = None
+    min: np.ndarray = None
+    t_max: np.ndarray = None
+    t_min: np.ndarray = None
+
+    def __post_init__(self):
+        m = len(self.names)
+        self.max, self.min = np.full(m, -np.inf), np.full(m, np.inf)
+        self.t_max, self.t_min = np.zeros(m), np.zeros(m)
+
+    def peak(self, name: str) -> float:
+        i = self.names.index(name)
+        return float(max(abs(self.max[i]), abs(self.min[i])))
+
+    def peaks(self) -> dict[str, float]:
+        """max |value| of every column but time."""
+        return {n: float(max(abs(hi), abs(lo))) for n, hi, lo in zip(self.names, self.max, self.min)
+                if n != "time_s"}
+
+    def as_dict(self) -> dict[str, dict[str, float]]:
+        return {n: {"max": float(self.max[i]), "time_of_max_s": float(self.t_max[i]),
+                    "min": float(self.min[i]), "time_of_min_s": float(self.t_min[i])}
+                for i, n in enumerate(self.names) if n != "time_s"}
+
+
+#: a time series is drawn from at most this many (min, max) pairs: more than a figure's pixels
+PLOT_BUCKETS = 2000
+#: curves drawn against each other (element loops) keep at most this many rows
+PLOT_SAMPLES = 50_000
+
+
+@dataclass
+class PlotData:
+    """What the plots need of a run of ``n_rows`` steps, whatever its length.
+
+    ``lo``, ``hi``: the smallest and largest value of every column within each of up to
+    PLOT_BUCKETS consecutive groups of steps (a line drawn through them keeps every peak);
+    ``sample``: every ``stride``-th row, for curves of one column against another.
+    """
+
+    n_rows: int
+    n_cols: int
+    bucket: int = field(init=False)
+    stride: int = field(init=False)
+    lo: np.ndarray = field(init=False)
+    hi: np.ndarray = field(init=False)
+    t_lo: np.ndarray = field(init=False)
+    t_hi: np.ndarray = field(init=False)
+    final: np.ndarray | None = field(init=False, default=None)  # the last row
+    _samples: list = field(init=False, default_factory=list)
+    _seen: int = field(init=False, default=0)
+
+    def __post_init__(self):
+        self.bucket = max(1, -(-self.n_rows // PLOT_BUCKETS))
+        self.stride = max(1, -(-self.n_rows // PLOT_SAMPLES))
+        nb = -(-self.n_rows // self.bucket)
+        self.lo = np.full((nb, self.n_cols), np.inf)
+        self.hi = np.full((nb, self.n_cols), -np.inf)
+        self.t_lo = np.full(nb, np.inf)
+        self.t_hi = np.full(nb, -np.inf)
+
+    def update(self, table: np.ndarray, extremes: Extremes) -> None:
+        """Fold a chunk of rows into the buckets and into ``extremes`` (one compiled pass)."""
+        from rbhyst.solve.kernels.compiled import kernel
+
+        n = len(table)
+        if n == 0:
+            return
+        # columns must be contiguous (the kernel runs down each); a block of rows of the run's
+        # column-major table is, though not F-contiguous as a whole: no copy for it
+        columns = table if table.strides[0] == table.itemsize else np.asfortranarray(table)
+        kernel("reduce_rows")(columns, self._seen, self.bucket, extremes.max, extremes.t_max, extremes.min,
+                              extremes.t_min, self.lo, self.hi, self.t_lo, self.t_hi)
+        first = (-self._seen) % self.stride
+        # (a strided view would keep the whole chunk alive: copied; stride 1 keeps it anyway)
+        self._samples.append(table if self.stride == 1 else table[first::self.stride].copy())
+        self._seen += n
+        self.final = table[-1].copy()
+
+    @property
+    def sample(self) -> np.ndarray:
+        return np.vstack(self._samples) if self._samples else np.empty((0, self.n_cols))
+
+    def series(self, col: int) -> tuple[np.ndarray, np.ndarray]:
+        """(t, y) of a line through every bucket's extremes (the raw rows when there are few)."""
+        if self.bucket == 1:
+            return self.lo[:, 0], self.lo[:, col]
+        t = np.column_stack([self.t_lo, self.t_hi]).ravel()
+        y = np.column_stack([self.lo[:, col], self.hi[:, col]]).ravel()
+        return t, y
+
+
+def estimate_columns(layout: Layout) -> list[tuple[str, int, str]]:
+    """(key, column, family) of every column whose error a run's estimate gives: G's motion and
+    total acceleration, the mounts' resultant, each element's force and each point's motion.
+    The key is the CSV column without its unit (``at1``, ``R3``, ``e3_f``, ``top_at2``); the
+    family groups the columns whose scale is shared where one of them is at rest."""
+    index = {name: i for i, name in enumerate(layout.names)}
+    out = [(k, index[f"{k}_{unit}"], fam) for fam, pairs in (
+        ("d", (("u1", "m"), ("u2", "m"), ("theta3", "rad"))),
+        ("at", (("at1", "m_s2"), ("at2", "m_s2"), ("alphat3", "rad_s2"))),
+        ("R", (("R1", "N"), ("R2", "N"), ("R3", "Nm")))) for k, unit in pairs]
+    for name, _ in layout.points:
+        out += [(f"{name}_{k}", index[f"{name}_{k}_{unit}"], fam)
+                for k, unit, fam in (("u1", "m", "pd"), ("u2", "m", "pd"), ("at1", "m_s2", "pat"),
+                                     ("at2", "m_s2", "pat"))]
+    n_el = layout.system.n_output_elements
+    out += [(f"e{k}_f", index[f"e{k}_f_N"], "ef") for k in range(1, n_el + 1)]
+    return out

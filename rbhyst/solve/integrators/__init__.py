@@ -1,0 +1,58 @@
+"""Integrators: one module per method, one registry name -> :class:`Method`.
+
+A fixed-step method names its step in the compiled loop (``kernel_id``) and
+builds that step's 3x3 coefficient matrices for a step h (``coefficients``).
+A method with a solver of its own (the reference) gives ``solve`` instead.
+"""
+
+from __future__ import annotations
+
+import importlib
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+from rbhyst.model.deck import INTEGRATORS
+
+N_COEF = 7  # coefficient matrices per substep level
+
+
+@dataclass(frozen=True)
+class Method:
+    name: str
+    summary: str
+    order: int
+    explicit: bool
+    kernel_id: int | None = None
+    #: the step depends on K0 (Chang, Chen-Ricles, KR-alpha): omega_0 h must stay resolved
+    structure_dependent: bool = False
+    #: (mass (3,), K0 (3, 3), C (3, 3), h) -> (N_COEF, 3, 3)
+    coefficients: Callable[[np.ndarray, np.ndarray, np.ndarray, float], np.ndarray] | None = None
+    #: (system, settings, keep=, csv=) -> Result, for methods outside the fixed-step loop
+    solve: Callable | None = None
+
+
+#: name -> module: a module is imported only when its method is used (the reference
+#: pulls in more than a plain run needs)
+_MODULES = {
+    "chang": "chang",
+    "central-difference": "central_difference",
+    "newmark": "newmark",
+    "kr-alpha": "kr_alpha",
+    "reference": "reference",
+    "adaptive": "adaptive",
+}
+
+
+def names() -> list[str]:
+    return list(INTEGRATORS)
+
+
+assert tuple(_MODULES) == INTEGRATORS  # one list of names: the deck's
+
+
+def get(name: str) -> Method:
+    if name not in _MODULES:
+        raise KeyError(f"unknown integrator {name!r}; choose one of {', '.join(_MODULES)}")
+    return importlib.import_module(f".{_MODULES[name]}", __name__).METHOD

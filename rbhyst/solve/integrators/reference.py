@@ -1,0 +1,344 @@
+"""The reference solution: an adaptive 8th-order Runge-Kutta method between reversals.
+
+Between two reversals every element stays on one branch (s, u_P, g_P), so its force
+f(u) = c_s(u) - g_P exp(-s alpha (u - u_P)) is a smooth closed form (seed eq. 14) and
+the equation of motion is an ordinary smooth ODE in (q, v):
+
+    q' = v,  M v' = p(t) - sum mult b f(b . q),  E_in' = p . v.
+
+It is integrated with DOP853 (Dormand and Prince's 8(5,3) pair with its 7th-order
+dense output, Hairer, Norsett and Wanner, Solving ODEs I, II.10; the coefficient
+tables are scipy's), compiled with numba. Two kinds of events end a step:
+
+- a reversal: an element's velocity b . v crosses zero against its branch. Its time
+  is located on the dense output (bisection-secant to round-off), the step is redone
+  to exactly that time, and the element starts its new branch there, from the force
+  it has (eq. 14 with t_P = the reversal). Interior double crossings are looked for
+  on a cubic Hermite interpolant of b . v and, when suspected, on the dense output.
+- a breakpoint of the load: a record's samples (between them it is linear, and so are
+  its pieces) and an analytic signal's start, end and corners (between them the kernel
+  evaluates the sine or pulse itself, exactly, at every time it asks; nothing is fitted
+  or stored per step).
+
+So the only error is the ODE solver's: local error per step below
+atol + rtol |y| (rtol = 1e-12 by default; atol = rtol times a displacement scale from
+the quasi-static response to the load with the elements' reversal stiffness, times
+the lowest circular frequency for velocities). Hysteretic energy is the closed-form
+work along each branch; input energy is integrated with the state.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from rbhyst.solve.integrators import dop853_tableau as _dop
+from rbhyst.errors import AnalysisError
+from rbhyst.solve.kernels.compiled import kernel
+from rbhyst.solve.kernels.dop853_layout import (NS, NY, R_ELEMENT, R_EVENTS, R_FEV, R_HMAX, R_HMIN, R_INFO, R_REJECTED, R_START_FLIPS, R_STATUS, R_STEPS, R_TIME, ST_NONFINITE, ST_OK, ST_OVERFLOW, ST_STEP_TOO_SMALL, ST_TOO_MANY_STEPS)
+from rbhyst.model.records import Series
+from rbhyst.model.signals import SINE
+from rbhyst.solve.history import Layout, Raw
+from rbhyst.solve.result import Result, RunStats
+from rbhyst.solve.integrators import Method
+
+RTOL = 1e-12
+MAX_STEPS = 50_000_000
+
+# DOP853 tables (12 stages, the 13th row is f at the end of the step, 3 more for dense output)
+_A = np.ascontiguousarray(_dop.A, dtype=float)
+_B = np.ascontiguousarray(_dop.B, dtype=float)
+_C = np.ascontiguousarray(_dop.C, dtype=float)
+_E3 = np.ascontiguousarray(_dop.E3, dtype=float)
+_E5 = np.ascontiguousarray(_dop.E5, dtype=float)
+_D = np.ascontiguousarray(_dop.D, dtype=float)
+
+
+# --------------------------------------------------------------------------
+# the load: records as linear pieces, analytic signals as they are
+# --------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Pieces:
+    """The load as the kernel evaluates it: breakpoints (n + 1,), the records' share (with the
+    constant load) at both ends of each piece (n, 2, 3), and the analytic signals' table
+    (signals, ROW_SIZE + 3) evaluated exactly at every time the kernel asks; ``signals``: those
+    signals and their weights into the load, for the same evaluation in Python."""
+
+    brk: np.ndarray
+    ends: np.ndarray
+    analytic: np.ndarray
+    signals: tuple = ()
+
+    def at(self, t: np.ndarray) -> np.ndarray:
+        """(n, 3) the load at times t, as the kernel sees it (a jump at a breakpoint: its right side)."""
+        t = np.asarray(t, dtype=float)
+        k = np.clip(np.searchsorted(self.brk, t, side="right") - 1, 0, len(self.brk) - 2)
+        ta, tb = self.brk[k], self.brk[k + 1]
+        w = ((t - ta) / (tb - ta))[:, None]
+        out = self.ends[k, 0] + w * (self.ends[k, 1] - self.ends[k, 0])
+        mid = 0.5 * (ta + tb)
+        for signal, weight in self.signals:
+            stop = math.inf if signal.end is None else signal.end
+            inside = (signal.start <= mid) & (mid <= stop)
+            out += np.where(inside, signal.inside(t), 0.0)[:, None] * weight
+        return out
+
+
+def load_pieces(system, t_end: float) -> Pieces:
+    """The load of ``system`` over [0, t_end] in pieces between breakpoints: a record's samples
+    (between them it is linear, so linear pieces are exact) and an analytic signal's start, end
+    and corners (between them it is smooth: the kernel evaluates it exactly, no fit and nothing
+    stored per step, so memory stays that of the records however long or fast the signals)."""
+    ex = system.excitation
+    pts = [np.array([0.0, t_end])]
+    for sig in ex.signals.values():
+        tk = sig.times if isinstance(sig, Series) else np.asarray(sig.breakpoints, dtype=float)
+        pts.append(tk[(tk > 0.0) & (tk < t_end)])
+    brk = np.unique(np.concatenate(pts))
+    keep = np.concatenate([[True], np.diff(brk) > 1e-12 * max(1.0, t_end)])
+    brk = brk[keep]
+    brk[-1] = t_end
+    brk = np.ascontiguousarray(brk)
+    weights = ex.weights(system.mass)
+    analytic = tuple((s, weights[k]) for k, s in ex.signals.items() if not isinstance(s, Series))
+    return Pieces(brk, np.ascontiguousarray(ex.record_pieces(brk, system.mass)),
+                  np.ascontiguousarray(ex.analytic_table(system.mass)), analytic)
+
+
+# --------------------------------------------------------------------------
+# driver
+# --------------------------------------------------------------------------
+
+
+def _load_samples(pieces: Pieces, per_piece: int = 4, most: int = 200_000) -> np.ndarray:
+    """(n, 3) the load at a few points of every piece (at most ``most`` points in all, and
+    every sine's peaks reached to a few per cent): the scale the tolerances are set from."""
+    brk = pieces.brk
+    t = np.concatenate([brk, (brk[:-1, None] + np.diff(brk)[:, None] * np.arange(1, per_piece) / per_piece).ravel()])
+    span = brk[-1] - brk[0]
+    for row in pieces.analytic:
+        if row[0] == SINE and row[2] > 0.0:
+            t = np.concatenate([t, np.linspace(brk[0], brk[-1], int(min(most, 8 * row[2] * span / (2 * np.pi) + 2)))])
+    if len(t) > most:
+        t = np.random.default_rng(0).choice(t, most, replace=False)
+    return pieces.at(np.sort(t))
+
+
+def _scales(system, pieces: Pieces, rtol):
+    """atol for (q, v): rtol x the quasi-static response to the load with the reversal stiffness."""
+    kr = (system.bvec.T * (system.mult * system.k_reversal)) @ system.bvec
+    p = _load_samples(pieces)
+    static = np.linalg.solve(kr, p.T).T
+    rg = math.sqrt(system.mass[2] / system.mass[0])
+    length = max(float(np.max(np.abs(static[:, :2]))), float(np.max(np.abs(static[:, 2]))) * rg)
+    if not length > 0.0:
+        length = 1e-6
+    m = 1.0 / np.sqrt(system.mass)
+    w1 = math.sqrt(max(float(np.min(np.linalg.eigvalsh(kr * np.outer(m, m)))), 0.0)) or 1.0
+    q = rtol * length * np.array([1.0, 1.0, 1.0 / rg])
+    return np.concatenate([q, q * w1, [0.0]]), length, w1
+
+
+def _initial_state(system, pieces: Pieces):
+    """(4, rows) branch sign, u_P, gap and antiderivative of every element row at the start
+    (gap NaN: virgin, worked out in the kernel), and q at the start: rest, at the static
+    equilibrium under gravity when there is one, the elements as its path left them."""
+    from rbhyst.solve.kernels.layout import A, G, S, U
+
+    s0 = _initial_branches(system, pieces)
+    init = np.zeros((4, len(s0)))
+    init[0] = s0
+    init[2] = np.nan
+    y0 = np.zeros(3)
+    static = getattr(system, "static", None)
+    if static is not None:
+        y0 = static.q.copy()
+        moved = static.st[:, S] != 0.0
+        init[0, moved] = static.st[moved, S]
+        init[1, moved] = static.st[moved, U]
+        init[2, moved] = static.st[moved, G]
+        init[3, moved] = static.st[moved, A]
+    return init, y0
+
+
+def _initial_branches(system, pieces: Pieces):
+    """Each element starts moving the way the initial acceleration (else the load's slope) pushes it."""
+    first = pieces.brk[1] - pieces.brk[0]
+    h = 1e-6 * first
+    p0, p1 = pieces.at(np.array([0.0, h]))
+    dp0 = (p1 - p0) / h  # the load's slope at the start, from inside the first piece
+    static = getattr(system, "static", None)
+    if static is not None:
+        p0 = p0 - static.r  # the weight is carried by the elements
+    a0 = p0 / system.mass
+    j0 = dp0 / system.mass
+    s = np.sign(system.bvec @ a0)
+    s2 = np.sign(system.bvec @ j0)
+    s = np.where(s != 0, s, np.where(s2 != 0, s2, 1.0))
+    return s.astype(float)
+
+
+class TooManySteps(AnalysisError):
+    """The adaptive integration ran past its budget of steps."""
+
+
+@dataclass
+class Solution:
+    """What the integration gives at the output times: state (q, v, input energy, viscous work),
+    element rows' deformation and force, hysteretic work."""
+
+    t: np.ndarray
+    y: np.ndarray  # (n, NY)
+    eu: np.ndarray
+    ef: np.ndarray
+    eh: np.ndarray
+    stats: dict
+
+    @property
+    def q(self) -> np.ndarray:
+        return self.y[:, :3]
+
+    def raw(self, system) -> Raw:
+        """The rows as a run's table takes them (rbhyst.solve.history)."""
+        v = self.y[:, 3:6]
+        energy = np.column_stack([self.y[:, 6], 0.5 * (v * v) @ system.mass, self.eh, self.y[:, 7]])
+        return Raw(t=self.t, d=self.q, v=v, u=self.eu, f=self.ef, e=energy)
+
+
+def integrate(system, t_out: np.ndarray, rtol: float = RTOL, pieces=None, max_steps: int = MAX_STEPS) -> Solution:
+    """Integrate from rest to t_out[-1] with output at the increasing times t_out (from 0).
+
+    ``pieces``: the load from :func:`load_pieces`, when a caller
+    integrates the same scene twice; ``max_steps``: a budget of steps (events cost one each).
+    Raises AnalysisError where it cannot finish (TooManySteps past the budget).
+    """
+    t_out = np.ascontiguousarray(t_out, dtype=float)
+    t_end = float(t_out[-1])
+    n_rows = len(t_out)
+    pieces = pieces if pieces is not None else load_pieces(system, t_end)
+    brk, coef, sig = pieces.brk, pieces.ends, pieces.analytic
+    atol, length, w1 = _scales(system, pieces, rtol)
+    ne = system.bvec.shape[0]
+    init, y0 = _initial_state(system, pieces)
+    out_y = np.zeros((n_rows, NY))
+    out_eu = np.zeros((n_rows, ne))
+    out_ef = np.zeros((n_rows, ne))
+    out_eh = np.zeros(n_rows)
+    info = np.zeros(R_INFO)
+    minv = 1.0 / system.mass
+    args = (minv, np.ascontiguousarray(system.bvec), system.mult, np.ascontiguousarray(system.params),
+            np.ascontiguousarray(system.C))
+    work = (np.zeros((6, ne)), np.zeros((7, NY)), np.zeros((16, NY)), np.zeros((7, NY)), np.zeros(3), np.zeros(NS + 1))
+    tail = (rtol, atol, init, y0, 1e-6, int(max_steps), _A, _B, _C, _E3, _E5, _D, out_y, out_eu, out_ef, out_eh, info, *work)
+    _integrate = kernel("integrate")
+    # compile (or load) before the clock starts, on a one-piece problem
+    _integrate(*args, brk[:2].copy(), coef[:1].copy(), sig, t_out[:1].copy(), *tail)
+    info[:] = 0.0
+    start = time.perf_counter()
+    rows = _integrate(*args, brk, coef, sig, t_out, *tail)
+    wall = time.perf_counter() - start
+    status = int(info[R_STATUS])
+    if status != ST_OK or rows != n_rows:
+        t = info[R_TIME]
+        if status == ST_OVERFLOW:
+            raise AnalysisError(f"t = {t:.6g} s: the adaptive solution took element {int(info[R_ELEMENT]) + 1} "
+                                "(distinct elements, deck order) out of its calibrated range (exp overflow)")
+        if status == ST_TOO_MANY_STEPS:
+            raise TooManySteps(f"t = {t:.6g} s: the adaptive solution (rtol {rtol:g}) took more than "
+                               f"{int(max_steps)} steps (reversals are events: each costs a step)")
+        why = {ST_STEP_TOO_SMALL: "its step size fell below round-off",
+               ST_NONFINITE: "the solution is no longer finite"}.get(status, "it stopped early")
+        raise AnalysisError(f"t = {t:.6g} s: the adaptive solution (rtol {rtol:g}) failed: {why}")
+    stats = {
+        "method": "DOP853: explicit Runge-Kutta 8(5,3) with 7th-order dense output (Hairer-Norsett-Wanner), "
+                  "compiled with numba",
+        "rtol": rtol,
+        "atol_q": atol[:3].tolist(),
+        "atol_v": atol[3:6].tolist(),
+        "atol_basis": {"displacement_scale_m": length, "lowest_circular_frequency_rad_s": w1},
+        "events": "reversals: element velocity b.v crossing zero against its branch, located on the dense "
+                  "output and stepped to exactly; load breakpoints: record samples (linear between them), the "
+                  "ends and corners of analytic signals (evaluated exactly between them)",
+        "load_pieces": int(len(coef)),
+        "steps": int(info[R_STEPS]),
+        "rejected_steps": int(info[R_REJECTED]),
+        "reversals": int(info[R_EVENTS]),
+        "branch_corrections_at_step_start": int(info[R_START_FLIPS]),
+        "rhs_evaluations": int(info[R_FEV]),
+        "smallest_step_s": float(info[R_HMIN]),
+        "largest_step_s": float(info[R_HMAX]),
+        "wall_s": wall,
+    }
+    return Solution(t_out, out_y, out_eu, out_ef, out_eh, stats)
+
+
+def solve_with_stats(system, settings, rtol: float = RTOL, t_out: np.ndarray | None = None,
+                     keep: bool = True, csv=None) -> tuple[Result, dict]:
+    """A Result of the adaptive integration and what it took (for study.json).
+
+    Output at every t_n = n dt (rows every ``settings.every`` steps kept; with output.spectra
+    also at every compute step where the excitation is split, which only the spectra see, as
+    in a fixed-step run), or at the increasing times ``t_out`` (from 0) if given, all kept: a
+    study asks for the union of several grids.
+    """
+    from rbhyst.solve.plan import Rows, compute_times, grid, run_spectra
+
+    n_steps, _ = grid(system, settings)
+    every = 1
+    spectra = None  # (a study's union of grids is not uniform: no spectra there)
+    segments = None
+    if t_out is None:
+        if n_steps < settings.every:
+            from rbhyst.errors import InputError
+
+            raise InputError(f"output.every: {settings.every} is more than the {n_steps} steps of the analysis")
+        every = settings.every
+        spectra = settings.spectra
+        if spectra is not None:
+            bounds, substeps = system.excitation.substeps(settings.dt, n_steps)
+            t_out = np.concatenate([[0.0], compute_times(bounds, substeps, settings.dt)])
+            segments = (bounds, substeps)
+        else:
+            t_out = settings.dt * np.arange(n_steps + 1)
+    sol = integrate(system, t_out, rtol)
+    raw = sol.raw(system)
+    layout = Layout(system, settings.points)
+    rows = Rows(layout, n_steps if segments else len(sol.t) - 1, every, keep, csv, spectra=spectra, dt=settings.dt)
+    try:
+        rows.add(raw.slice(0, 1))
+        if segments is None:
+            rows.add(raw.slice(1, len(sol.t)))
+        else:
+            i = 1
+            bounds, substeps = segments
+            for lo, hi, nsub in zip(bounds[:-1], bounds[1:], substeps):
+                n = int(hi - lo) * int(nsub)
+                rows.add(raw.slice(i, i + n), sub=int(nsub))
+                i += n
+    finally:
+        table = rows.close()
+    stats = RunStats(steps=n_steps, steps_taken=sol.stats["steps"], wall_s=sol.stats["wall_s"])
+    result = Result(system=system, settings=settings, columns=layout.names, table=table, extremes=rows.extremes,
+                    plot=rows.plot, stats=stats, layout=layout, csv_path=rows.csv_path, compared=rows.compared,
+                    compare_every=rows.compare_every, solver=sol.stats,
+                    spectra=run_spectra(system, settings, rows.body_spectra()))
+    return result, sol.stats
+
+
+def solve(system, settings, keep: bool = True, csv=None) -> Result:
+    return solve_with_stats(system, settings, rtol=RTOL, keep=keep, csv=csv)[0]
+
+
+METHOD = Method(
+    name="reference",
+    summary="adaptive DOP853 between reversals located as events: the study's reference (slow)",
+    order=8,
+    explicit=True,
+    solve=solve,
+)
+

@@ -1,0 +1,14 @@
+"""Compiled time stepping: plain arrays and floats in, preallocated buffers out.
+
+- :mod:`.layout`: the constants the loop and the Python side share;
+- :mod:`.elements`: the element rows at a new configuration (VRM, seed eqs. 5-17), the
+  stiffness bounds the monitor needs;
+- :mod:`.loop`: the loop shared by every fixed-step method (substeps, monitor, energy,
+  chunked output); a method's own step lives beside its coefficients in
+  :mod:`rbhyst.solve.integrators`;
+- :mod:`.dop853`: the adaptive integration; :mod:`.csvfmt`: CSV text; :mod:`.reduce`: peaks;
+- :mod:`.compiled`: the kernels built ahead of time at install, or numba's JIT.
+
+Everything here is called through :mod:`rbhyst.solve.plan`. Importing this package loads no
+compiled code.
+"""

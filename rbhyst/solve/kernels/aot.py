@@ -1,0 +1,70 @@
+"""The compiled kernels built ahead of time, at install, into the extension ``rbhyst.solve.kernels._aot``.
+
+A command that loads numba spends about a second before its first step (importing numba,
+refreshing its target, loading cached code); the same kernels compiled at install into a
+plain extension module load in milliseconds. setup.py builds them with numba's ahead-of-time
+compiler from the very functions the JIT compiles (no second implementation), without
+reference counting (every buffer comes from the caller, as in the JIT kernels) and for a
+generic CPU of the platform, so that a built wheel runs on any machine of its kind.
+``STAMP`` of the kernels' sources is compiled in: a working copy edited since the build
+falls back to the JIT kernels (rbhyst.solve.kernels.compiled), never to stale code.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from pathlib import Path
+
+PACKAGE = Path(__file__).resolve().parents[2]
+
+#: every source file whose code (or constants) the exported kernels compile in
+SOURCES = ("model/hysteresis.py", "model/vrm.py", "model/signals.py", "solve/kernels/layout.py",
+           "solve/kernels/elements.py", "solve/kernels/loop.py", "solve/kernels/csvfmt.py", "solve/kernels/reduce.py",
+           "solve/kernels/dop853.py", "solve/kernels/dop853_layout.py", "solve/integrators/steps.py",
+           "solve/integrators/chang.py", "solve/integrators/central_difference.py", "solve/integrators/kr_alpha.py",
+           "solve/integrators/newmark.py")
+
+#: name -> (module, function, signature)
+EXPORTS = {
+    "run_chunk": ("rbhyst.solve.kernels.loop", "run_chunk",
+                  "i8(i8, f8[:,:,:,::1], f8[::1], f8[::1], f8[:,::1], b1, f8[:,::1], f8[::1], f8[:,:,::1], "
+                  "f8[::1], f8[:,::1], f8, f8, i8, i8, f8, i8, i8, f8, i8, f8[::1], f8[:,:,::1], f8[:,::1], "
+                  "f8[:,::1], f8[:,::1], f8[:,::1], f8[:,::1], f8[:,::1], f8[:,::1], f8[::1])"),
+    "integrate": ("rbhyst.solve.kernels.dop853", "_integrate",
+                  "i8(f8[::1], f8[:,::1], f8[::1], f8[:,:,::1], f8[:,::1], f8[::1], f8[:,:,::1], f8[:,::1], "
+                  "f8[::1], f8, f8[::1], f8[:,::1], f8[::1], f8, i8, f8[:,::1], f8[::1], f8[::1], f8[::1], "
+                  "f8[::1], f8[:,::1], f8[:,::1], f8[:,::1], f8[:,::1], f8[::1], f8[::1], f8[:,::1], "
+                  "f8[:,::1], f8[:,::1], f8[:,::1], f8[::1], f8[::1])"),
+    "decompose": ("rbhyst.solve.kernels.csvfmt", "_decompose",
+                  "i8(f8[:,::1], i8[:,::1], i8[:,::1], i1[:,::1], f8[::1])"),
+    "render": ("rbhyst.solve.kernels.csvfmt", "_render", "i8(f8[:,::1], i8[:,::1], i8[:,::1], i1[:,::1], u1[::1], i8[::1])"),
+    "reduce_rows": ("rbhyst.solve.kernels.reduce", "reduce_rows",
+                    "void(f8[:,:], i8, i8, f8[::1], f8[::1], f8[::1], f8[::1], f8[:,::1], f8[:,::1], "
+                    "f8[::1], f8[::1])"),
+}
+
+
+def source_stamp() -> int:
+    """A 60-bit digest of the kernels' sources (as an int: what an exported function can return)."""
+    h = hashlib.sha256()
+    for rel in SOURCES:
+        h.update(rel.encode())
+        h.update((PACKAGE / rel).read_bytes())
+    return int(h.hexdigest()[:15], 16)
+
+
+def compiler():
+    """numba's ahead-of-time compiler set up with every export (imports numba: build time only)."""
+    import importlib
+
+    from numba.pycc import CC
+
+    cc = CC("_aot", source_module="rbhyst.solve.kernels.aot")
+    cc.use_nrt = False  # as the JIT kernels: no reference counting, every buffer from the caller
+    cc.verbose = False
+    for name, (module, func, sig) in EXPORTS.items():
+        fn = getattr(importlib.import_module(module), func)
+        cc.export(name, sig)(fn.py_func)
+    stamp = source_stamp()
+    cc.export("stamp", "i8()")(eval(f"lambda: {stamp}"))  # the sources it was built from
+    return cc

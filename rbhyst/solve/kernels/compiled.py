@@ -1,0 +1,67 @@
+"""The compiled kernels a run calls: built ahead of time when they are current, else numba's JIT.
+
+``kernel(name)`` gives the extension's function where ``rbhyst.solve.kernels._aot`` was built at
+install from the sources as they are now (rbhyst.solve.kernels.aot), and otherwise the numba
+dispatcher (compiled on first use and cached). Both run the same code to the bit; only the
+first costs no numba import. ``RBHYST_JIT=1`` in the environment forces the JIT kernels.
+"""
+
+from __future__ import annotations
+
+import functools
+import importlib
+import os
+
+
+@functools.cache
+def _aot():
+    """The extension module, if it exists and was built from the sources as they are now."""
+    if os.environ.get("RBHYST_JIT") or os.environ.get("NUMBA_DISABLE_JIT"):
+        return None
+    try:
+        from rbhyst.solve.kernels import _aot as module
+        from rbhyst.solve.kernels.aot import source_stamp
+    except ImportError:
+        return None
+    return module if module.stamp() == source_stamp() else None
+
+
+def ahead_of_time() -> bool:
+    """Whether the kernels come from the extension built at install."""
+    return _aot() is not None
+
+
+def kernel(name: str):
+    """The callable for one of rbhyst.solve.kernels.aot.EXPORTS."""
+    module = _aot()
+    if module is not None:
+        return getattr(module, name)
+    from rbhyst.solve.kernels.aot import EXPORTS
+
+    mod, func, _ = EXPORTS[name]
+    return getattr(importlib.import_module(mod), func)
+
+
+def cached(dispatchers) -> bool:
+    """Whether numba's cache holds compiled code for these dispatchers' current sources.
+
+    A cold cache (a fresh install, an edited kernel) means seconds of compiling before the
+    first run: the command line says so once. Any doubt (numba's cache layout is its own)
+    counts as cached, so that nothing false is said.
+    """
+    try:
+        return all(bool(d._cache._cache_file._load_index()) for d in dispatchers)
+    except Exception:  # pragma: no cover - a numba without this layout
+        return True
+
+
+def run_kernels():
+    """The dispatchers a fixed-step run loads (none when they were built ahead of time)."""
+    if ahead_of_time():
+        return ()
+    from rbhyst.solve.kernels.csvfmt import _decompose, _render
+    from rbhyst.solve.kernels.dop853 import _integrate
+    from rbhyst.solve.kernels.loop import run_chunk
+    from rbhyst.solve.kernels.reduce import reduce_rows
+
+    return run_chunk, _decompose, _render, reduce_rows, _integrate

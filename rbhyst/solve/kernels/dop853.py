@@ -1,0 +1,504 @@
+"""The adaptive integration's compiled kernel: DOP853 between reversals located as events.
+
+See rbhyst.solve.integrators.reference for the method; this module holds only compiled code (the
+driver there calls it through rbhyst.solve.kernels.compiled).
+"""
+
+from __future__ import annotations
+
+import math
+
+from numba import njit
+
+from rbhyst.model.hysteresis import ALPHA, EXP_ARG_MAX
+from rbhyst.solve.kernels.dop853_layout import (NERR, NS, NY, R_ELEMENT, R_EVENTS, R_FEV, R_HMAX, R_HMIN, R_REJECTED, R_START_FLIPS, R_STATUS, R_STEPS, R_TIME, SIMULTANEOUS, ST_NONFINITE, ST_OK, ST_OVERFLOW, ST_STEP_TOO_SMALL, ST_TOO_MANY_STEPS)
+from rbhyst.model.signals import HALF_SINE, HAVERSINE, ROW_SIZE as ROW, SAWTOOTH, SINE
+from rbhyst.model.vrm import branch_eval, branch_row
+
+
+# --------------------------------------------------------------------------
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _force(params, e, s, up, gp, u):
+    """Force of element e on the branch (s, u_P, g_P) at u (eq. 14) and C_s(u); ok False on overflow."""
+    row = branch_row(s)
+    c, kc, big, ok = branch_eval(params, e, row, s, u)
+    x = -s * params[e, row, ALPHA] * (u - up)
+    if not ok or x > EXP_ARG_MAX:
+        return 0.0, 0.0, False
+    return c - gp * math.exp(x), big, True
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _analytic(sig, i, t, inside):
+    """Analytic signal i of the table (rbhyst.model.signals row layout) at t; ``inside``: whether the
+    piece being stepped lies within the signal's span (its ends are breakpoints, so a piece is
+    inside or outside as a whole, and a jump at an end is seen from the piece's own side)."""
+    if not inside:
+        return 0.0
+    kind = int(sig[i, 0])
+    amp = sig[i, 1]
+    start = sig[i, 4]
+    if kind == SINE:
+        v = amp * math.sin(sig[i, 2] * (t - start) + sig[i, 3])
+        ramp = sig[i, 6]
+        if ramp > 0.0:
+            tau = min(max((t - start) / ramp, 0.0), 1.0)
+            v *= tau - math.sin(2.0 * math.pi * tau) / (2.0 * math.pi)
+        return v
+    tau = min(max((t - start) / sig[i, 7], 0.0), 1.0)
+    if kind == HALF_SINE:
+        return amp * math.sin(math.pi * tau)
+    if kind == HAVERSINE:
+        return amp * 0.5 * (1.0 - math.cos(2.0 * math.pi * tau))
+    if kind == SAWTOOTH:
+        return amp * tau
+    return amp * (1.0 - abs(2.0 * tau - 1.0))  # TRIANGLE
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _load(t, k, brk, pcoef, sig, out):
+    """The load at t in piece k: the records' share linear between the piece's ends (exact: their
+    samples are breakpoints), every analytic signal evaluated where it is (no fit, no table)."""
+    ta = brk[k]
+    tb = brk[k + 1]
+    w = (t - ta) / (tb - ta)
+    for c in range(3):
+        out[c] = pcoef[k, 0, c] + w * (pcoef[k, 1, c] - pcoef[k, 0, c])
+    mid = 0.5 * (ta + tb)
+    for i in range(sig.shape[0]):
+        v = _analytic(sig, i, t, sig[i, 4] <= mid <= sig[i, 5])
+        if v != 0.0:
+            for c in range(3):
+                out[c] += sig[i, ROW + c] * v
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _rhs(t, y, k, brk, pcoef, sig, minv, bvec, mult, params, cm, s, up, gp, p, dy):
+    """dy = (v, M^-1 (p - R - C v), p . v, v . C v); returns the first element that overflowed, or -1."""
+    _load(t, k, brk, pcoef, sig, p)
+    r0 = 0.0
+    r1 = 0.0
+    r2 = 0.0
+    for e in range(bvec.shape[0]):
+        b0 = bvec[e, 0]
+        b1 = bvec[e, 1]
+        b2 = bvec[e, 2]
+        f, _, ok = _force(params, e, s[e], up[e], gp[e], b0 * y[0] + b1 * y[1] + b2 * y[2])
+        if not ok:
+            return e
+        mf = mult[e] * f
+        r0 += mf * b0
+        r1 += mf * b1
+        r2 += mf * b2
+    dy[0] = y[3]
+    dy[1] = y[4]
+    dy[2] = y[5]
+    c0 = cm[0, 0] * y[3] + cm[0, 1] * y[4] + cm[0, 2] * y[5]
+    c1 = cm[1, 0] * y[3] + cm[1, 1] * y[4] + cm[1, 2] * y[5]
+    c2 = cm[2, 0] * y[3] + cm[2, 1] * y[4] + cm[2, 2] * y[5]
+    dy[3] = minv[0] * (p[0] - r0 - c0)
+    dy[4] = minv[1] * (p[1] - r1 - c1)
+    dy[5] = minv[2] * (p[2] - r2 - c2)
+    dy[6] = p[0] * y[3] + p[1] * y[4] + p[2] * y[5]
+    dy[7] = c0 * y[3] + c1 * y[4] + c2 * y[5]
+    return -1
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _dense(F, y_old, x, i):
+    """Component i of the DOP853 dense output at x in [0, 1] of the step."""
+    acc = F[6, i]
+    acc = F[5, i] + x * acc
+    acc = F[4, i] + (1.0 - x) * acc
+    acc = F[3, i] + x * acc
+    acc = F[2, i] + (1.0 - x) * acc
+    acc = F[1, i] + x * acc
+    acc = F[0, i] + (1.0 - x) * acc
+    return y_old[i] + x * acc
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _g_dense(F, y_old, x, bvec, e, s):
+    """s_e (b_e . v) on the dense output: positive while the element moves along its branch."""
+    w = bvec[e, 0] * _dense(F, y_old, x, 3) + bvec[e, 1] * _dense(F, y_old, x, 4) + bvec[e, 2] * _dense(F, y_old, x, 5)
+    return s * w
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _integrate(minv, bvec, mult, params, cm, brk, pcoef, sig, t_out, rtol, atol, init, y0, h_first, max_steps,
+               A, B, C, E3, E5, D, out_y, out_eu, out_ef, out_eh, info, el, vec, K, F, p, gs):
+    """The whole integration; el (6, ne), vec (7, NY), K (16, NY), F (7, NY), p (3,), gs (NS + 1,)
+    are its work space (allocated by the caller: no reference counting in here)."""
+    ne = bvec.shape[0]
+    n_int = brk.shape[0] - 1
+    n_out = t_out.shape[0]
+    el[:, :] = 0.0
+    vec[:, :] = 0.0
+    s = el[0]
+    up = el[1]
+    gp = el[2]
+    ap = el[3]  # C_s(u_P): antiderivative at the branch start
+    wacc = el[4]  # work of the element up to its branch start
+    for e in range(ne):
+        # init rows: branch sign, its start u_P, the gap there, the antiderivative there
+        s[e] = init[0, e]
+        up[e] = init[1, e]
+        if math.isnan(init[2, e]):  # virgin: f = 0 at u = 0
+            row = branch_row(s[e])
+            c, kc, big, ok = branch_eval(params, e, row, s[e], 0.0)
+            gp[e] = c
+            ap[e] = big
+        else:
+            gp[e] = init[2, e]
+            ap[e] = init[3, e]
+
+    y = vec[0]
+    y[0] = y0[0]
+    y[1] = y0[1]
+    y[2] = y0[2]
+    y_new = vec[1]
+    y_ev = vec[2]
+    ytmp = vec[3]
+    f = vec[4]
+    f_new = vec[5]
+    yo = vec[6]
+    xroot = el[5]  # where in the step each element reverses (2: not in this step)
+    t = 0.0
+    h = h_first
+    io = 0
+    n_steps = 0
+    n_rej = 0
+    n_ev = 0
+    n_fev = 0
+    n_start = 0
+    h_min_seen = math.inf
+    h_max_seen = 0.0
+    exponent = -1.0 / 8.0
+
+    for k in range(n_int):
+        tb = brk[k + 1]
+        bad = _rhs(t, y, k, brk, pcoef, sig, minv, bvec, mult, params, cm, s, up, gp, p, f)
+        n_fev += 1
+        if bad >= 0:
+            info[R_STATUS] = ST_OVERFLOW
+            info[R_ELEMENT] = bad
+            info[R_TIME] = t
+            return io
+        if io < n_out and t_out[io] <= t:
+            # outputs at the start (t = 0) come from the state itself
+            while io < n_out and t_out[io] <= t:
+                for i in range(NY):
+                    yo[i] = y[i]
+                io = _write(io, yo, bvec, mult, params, s, up, gp, ap, wacc, out_y, out_eu, out_ef, out_eh)
+        while tb - t > 1e-13 * max(1.0, abs(tb)):
+            if n_steps + n_rej > max_steps:
+                info[R_STATUS] = ST_TOO_MANY_STEPS
+                info[R_TIME] = t
+                return io
+            hh = h
+            if t + hh >= tb - 1e-13 * max(1.0, abs(tb)):
+                hh = tb - t
+            if hh < 1e-14 * max(1.0, abs(t)):
+                info[R_STATUS] = ST_STEP_TOO_SMALL
+                info[R_TIME] = t
+                return io
+            # ---- one DOP853 step
+            for i in range(NY):
+                K[0, i] = f[i]
+            bad = _stages(1, 12, t, hh, y, k, brk, pcoef, sig, minv, bvec, mult, params, cm, s, up, gp, p, A, C, K, ytmp)
+            n_fev += 11
+            if bad < 0:
+                for i in range(NY):
+                    acc = 0.0
+                    for j in range(12):
+                        acc += B[j] * K[j, i]
+                    y_new[i] = y[i] + hh * acc
+                bad = _rhs(t + hh, y_new, k, brk, pcoef, sig, minv, bvec, mult, params, cm, s, up, gp, p, f_new)
+                n_fev += 1
+            if bad >= 0:
+                # an exponential overflowed inside the step: try a smaller one first
+                if hh > 1e-9:
+                    h = 0.25 * hh
+                    n_rej += 1
+                    continue
+                info[R_STATUS] = ST_OVERFLOW
+                info[R_ELEMENT] = bad
+                info[R_TIME] = t
+                return io
+            for i in range(NY):
+                K[12, i] = f_new[i]
+            err5 = 0.0
+            err3 = 0.0
+            for i in range(NERR):
+                sc = atol[i] + rtol * max(abs(y[i]), abs(y_new[i]))
+                a5 = 0.0
+                a3 = 0.0
+                for j in range(13):
+                    a5 += E5[j] * K[j, i]
+                    a3 += E3[j] * K[j, i]
+                a5 /= sc
+                a3 /= sc
+                err5 += a5 * a5
+                err3 += a3 * a3
+            if err5 == 0.0 and err3 == 0.0:
+                err = 0.0
+            else:
+                err = hh * err5 / math.sqrt((err5 + 0.01 * err3) * NERR)
+            if not (err < math.inf):
+                h = 0.25 * hh
+                n_rej += 1
+                continue
+            if err > 1.0:
+                h = hh * max(0.2, 0.9 * err ** exponent)
+                n_rej += 1
+                continue
+            factor = 10.0 if err == 0.0 else min(10.0, 0.9 * err ** exponent)
+            # ---- events: an element's velocity crossing zero against its branch
+            need = False
+            for e in range(ne):
+                g0 = s[e] * (bvec[e, 0] * y[3] + bvec[e, 1] * y[4] + bvec[e, 2] * y[5])
+                g1 = s[e] * (bvec[e, 0] * y_new[3] + bvec[e, 1] * y_new[4] + bvec[e, 2] * y_new[5])
+                if g1 < 0.0:
+                    need = True
+                    break
+                # cubic Hermite of g over the step, from g and g' at both ends
+                d0 = hh * s[e] * (bvec[e, 0] * f[3] + bvec[e, 1] * f[4] + bvec[e, 2] * f[5])
+                d1 = hh * s[e] * (bvec[e, 0] * f_new[3] + bvec[e, 1] * f_new[4] + bvec[e, 2] * f_new[5])
+                seen = g0 > 0.0
+                for m in range(1, NS):
+                    x = m / NS
+                    h00 = (1.0 + 2.0 * x) * (1.0 - x) * (1.0 - x)
+                    h10 = x * (1.0 - x) * (1.0 - x)
+                    h01 = x * x * (3.0 - 2.0 * x)
+                    h11 = x * x * (x - 1.0)
+                    gm = h00 * g0 + h10 * d0 + h01 * g1 + h11 * d1
+                    if gm < 0.0 and seen:
+                        need = True
+                        break
+                    if gm > 0.0:
+                        seen = True
+                if need:
+                    break
+            have_dense = False
+            ev = -1
+            x_ev = 2.0
+            if need:
+                _dense_coefficients(t, hh, y, y_new, f, f_new, k, brk, pcoef, sig, minv, bvec, mult, params,
+                                    cm, s, up, gp, p, A, C, D, K, F, ytmp)
+                n_fev += 3
+                have_dense = True
+                for e in range(ne):
+                    xroot[e] = 2.0
+                    se = s[e]
+                    gs[0] = se * (bvec[e, 0] * y[3] + bvec[e, 1] * y[4] + bvec[e, 2] * y[5])
+                    gs[NS] = se * (bvec[e, 0] * y_new[3] + bvec[e, 1] * y_new[4] + bvec[e, 2] * y_new[5])
+                    for m in range(1, NS):
+                        gs[m] = _g_dense(F, y, m / NS, bvec, e, se)
+                    seen = gs[0] > 0.0
+                    found = -1
+                    for m in range(1, NS + 1):
+                        if gs[m] < 0.0 and seen:
+                            found = m
+                            break
+                        if gs[m] > 0.0:
+                            seen = True
+                    if found < 0:
+                        if not seen and gs[NS] < 0.0:
+                            # moving against its branch from the very start: flip it at t
+                            xroot[e] = 0.0
+                            if 0.0 < x_ev:
+                                x_ev = 0.0
+                                ev = e
+                        continue
+                    # root of g in [xa, xb], g(xa) >= 0 > g(xb): bisection-secant (Illinois)
+                    xa = (found - 1) / NS
+                    xb = found / NS
+                    ga = gs[found - 1]
+                    gb = gs[found]
+                    side = 0
+                    for _ in range(200):
+                        if xb - xa <= 4e-16:
+                            break
+                        xm = (xa * gb - xb * ga) / (gb - ga) if ga != gb else 0.5 * (xa + xb)
+                        if not (xa < xm < xb):
+                            xm = 0.5 * (xa + xb)
+                        gm = _g_dense(F, y, xm, bvec, e, se)
+                        if gm == 0.0:
+                            xa = xm
+                            xb = xm
+                            break
+                        if gm > 0.0:
+                            xa = xm
+                            ga = gm
+                            if side == 1:
+                                gb *= 0.5
+                            side = 1
+                        else:
+                            xb = xm
+                            gb = gm
+                            if side == -1:
+                                ga *= 0.5
+                            side = -1
+                    xr = 0.5 * (xa + xb)
+                    xroot[e] = xr
+                    if xr < x_ev:
+                        x_ev = xr
+                        ev = e
+            if ev >= 0 and x_ev == 0.0:
+                # a branch chosen against the motion (a virgin element, or round-off at a reversal)
+                for e in range(ne):
+                    if xroot[e] == 0.0:
+                        _new_branch(e, y, bvec, params, s, up, gp, ap, wacc)
+                        n_start += 1
+                bad = _rhs(t, y, k, brk, pcoef, sig, minv, bvec, mult, params, cm, s, up, gp, p, f)
+                n_fev += 1
+                if n_start > 100 * (n_ev + n_steps + 10):
+                    info[R_STATUS] = ST_STEP_TOO_SMALL
+                    info[R_TIME] = t
+                    return io
+                continue
+            if ev >= 0:
+                t_ev = t + x_ev * hh
+                # outputs before the reversal from this step's dense output
+                while io < n_out and t_out[io] < t_ev:
+                    x = (t_out[io] - t) / hh
+                    for i in range(NY):
+                        yo[i] = _dense(F, y, x, i)
+                    io = _write(io, yo, bvec, mult, params, s, up, gp, ap, wacc, out_y, out_eu, out_ef, out_eh)
+                # redo the step to the reversal exactly
+                h_ev = t_ev - t
+                if h_ev > 0.0:
+                    _stages(1, 12, t, h_ev, y, k, brk, pcoef, sig, minv, bvec, mult, params, cm, s, up, gp, p, A, C, K, ytmp)
+                    n_fev += 11
+                    for i in range(NY):
+                        acc = 0.0
+                        for j in range(12):
+                            acc += B[j] * K[j, i]
+                        y_ev[i] = y[i] + h_ev * acc
+                else:
+                    for i in range(NY):
+                        y_ev[i] = y[i]
+                t = t_ev
+                for i in range(NY):
+                    y[i] = y_ev[i]
+                while io < n_out and t_out[io] <= t:
+                    io = _write(io, y, bvec, mult, params, s, up, gp, ap, wacc, out_y, out_eu, out_ef, out_eh)
+                # elements that reverse together (identical b and sets, or by chance within
+                # SIMULTANEOUS of the step) all start their new branches here
+                for e in range(ne):
+                    if xroot[e] <= x_ev + SIMULTANEOUS:
+                        _new_branch(e, y, bvec, params, s, up, gp, ap, wacc)
+                        n_ev += 1
+                n_steps += 1
+                bad = _rhs(t, y, k, brk, pcoef, sig, minv, bvec, mult, params, cm, s, up, gp, p, f)
+                n_fev += 1
+                if h_ev > 0.0:
+                    h_min_seen = min(h_min_seen, h_ev)
+                continue
+            # ---- accept the whole step
+            while io < n_out and t_out[io] < t + hh:
+                if not have_dense:
+                    _dense_coefficients(t, hh, y, y_new, f, f_new, k, brk, pcoef, sig, minv, bvec, mult, params,
+                                        cm, s, up, gp, p, A, C, D, K, F, ytmp)
+                    n_fev += 3
+                    have_dense = True
+                x = (t_out[io] - t) / hh
+                for i in range(NY):
+                    yo[i] = _dense(F, y, x, i)
+                io = _write(io, yo, bvec, mult, params, s, up, gp, ap, wacc, out_y, out_eu, out_ef, out_eh)
+            clipped = hh < h
+            t = tb if hh == tb - t else t + hh
+            for i in range(NY):
+                y[i] = y_new[i]
+                f[i] = f_new[i]
+            n_steps += 1
+            h_min_seen = min(h_min_seen, hh)
+            h_max_seen = max(h_max_seen, hh)
+            h = max(h, hh * factor) if clipped else hh * factor
+            while io < n_out and t_out[io] <= t:
+                io = _write(io, y, bvec, mult, params, s, up, gp, ap, wacc, out_y, out_eu, out_ef, out_eh)
+            if not (math.isfinite(y[0]) and math.isfinite(y[1]) and math.isfinite(y[2])):
+                info[R_STATUS] = ST_NONFINITE
+                info[R_TIME] = t
+                return io
+    # outputs left by round-off at the very end
+    while io < n_out:
+        io = _write(io, y, bvec, mult, params, s, up, gp, ap, wacc, out_y, out_eu, out_ef, out_eh)
+    info[R_STATUS] = ST_OK
+    info[R_STEPS] = n_steps
+    info[R_REJECTED] = n_rej
+    info[R_EVENTS] = n_ev
+    info[R_FEV] = n_fev
+    info[R_HMIN] = h_min_seen
+    info[R_HMAX] = h_max_seen
+    info[R_START_FLIPS] = n_start
+    return io
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _stages(first, last, t, hh, y, k, brk, pcoef, sig, minv, bvec, mult, params, cm, s, up, gp, p, A, C, K, ytmp):
+    """Runge-Kutta stages first..last-1 of a step hh from (t, y) into the rows of K;
+    returns the first element whose exponential overflowed, or -1."""
+    for st in range(first, last):
+        for i in range(NY):
+            acc = 0.0
+            for j in range(st):
+                acc += A[st, j] * K[j, i]
+            ytmp[i] = y[i] + hh * acc
+        bad = _rhs(t + C[st] * hh, ytmp, k, brk, pcoef, sig, minv, bvec, mult, params, cm, s, up, gp, p, K[st])
+        if bad >= 0:
+            return bad
+    return -1
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _dense_coefficients(t, hh, y, y_new, f, f_new, k, brk, pcoef, sig, minv, bvec, mult, params, cm, s, up, gp, p,
+                        A, C, D, K, F, ytmp):
+    """The three extra stages and the 7 rows of DOP853's dense output (as scipy's DOP853)."""
+    _stages(13, 16, t, hh, y, k, brk, pcoef, sig, minv, bvec, mult, params, cm, s, up, gp, p, A, C, K, ytmp)
+    for i in range(NY):
+        dy = y_new[i] - y[i]
+        F[0, i] = dy
+        F[1, i] = hh * f[i] - dy
+        F[2, i] = 2.0 * dy - hh * (f_new[i] + f[i])
+        for r in range(4):
+            acc = 0.0
+            for j in range(16):
+                acc += D[r, j] * K[j, i]
+            F[3 + r, i] = hh * acc
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _new_branch(e, y, bvec, params, s, up, gp, ap, wacc):
+    """Element e reverses at the current state: a new branch from the force it has (eq. 14)."""
+    u = bvec[e, 0] * y[0] + bvec[e, 1] * y[1] + bvec[e, 2] * y[2]
+    f_old, big_old, _ = _force(params, e, s[e], up[e], gp[e], u)
+    alpha = params[e, branch_row(s[e]), ALPHA]
+    wacc[e] += big_old - ap[e] + s[e] * gp[e] * (math.exp(-s[e] * alpha * (u - up[e])) - 1.0) / alpha
+    s[e] = -s[e]
+    row = branch_row(s[e])
+    c, kc, big, ok = branch_eval(params, e, row, s[e], u)
+    up[e] = u
+    gp[e] = c - f_old
+    ap[e] = big
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _write(io, y, bvec, mult, params, s, up, gp, ap, wacc, out_y, out_eu, out_ef, out_eh):
+    """One output row from the state y on the current branches: the state, each element row's
+    deformation and force, the hysteretic work."""
+    eh = 0.0
+    for e in range(bvec.shape[0]):
+        u = bvec[e, 0] * y[0] + bvec[e, 1] * y[1] + bvec[e, 2] * y[2]
+        fe, big, _ = _force(params, e, s[e], up[e], gp[e], u)
+        alpha = params[e, branch_row(s[e]), ALPHA]
+        w = wacc[e] + big - ap[e] + s[e] * gp[e] * (math.exp(-s[e] * alpha * (u - up[e])) - 1.0) / alpha
+        out_eu[io, e] = u
+        out_ef[io, e] = fe
+        eh += mult[e] * w
+    for i in range(NY):
+        out_y[io, i] = y[i]
+    out_eh[io] = eh
+    return io + 1

@@ -1,0 +1,447 @@
+"""simulate(system, settings) -> Result: the time grid, the load on it, and the compiled loop.
+
+The loop runs one chunk of steps at a time; every chunk's rows pass through the run's
+reductions (extremes, plot data) and are kept in memory or streamed to a CSV file, so a
+run's memory does not grow with its length.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+
+from rbhyst.solve import integrators
+from rbhyst.solve.kernels import layout as kernels
+from rbhyst.errors import AnalysisError, InputError, byte_size
+from rbhyst.solve.history import Extremes, Layout, PlotData, Raw, body_spectrum_columns, estimate_columns
+from rbhyst.solve.kernels.layout import N_STATE, N_X, X_A, X_CUR, X_D, X_ITER, X_LEVEL_USED, X_OMEGA_DT2, X_STEPS, X_SUBSTEPS
+from rbhyst.model.system import System
+from rbhyst.solve.result import Result, RunStats
+from rbhyst.solve.static import at_rest_under_gravity
+from rbhyst.model.settings import Settings, settings_from_deck  # noqa: F401  (re-exported: the run's inputs)
+
+#: bytes of rows a chunk may hold (raw state and table): bounds a run's memory
+CHUNK_BYTES = 16_000_000
+#: at most this many values (rows x columns) of a run are kept for its error estimate (every k-th row)
+COMPARE_VALUES = 4_000_000
+
+
+def grid(system: System, s: Settings) -> tuple[int, int]:
+    """(output steps, the most compute steps per output step): an excitation finer than dt is
+    followed, not aliased (see Excitation.substeps)."""
+    n_steps = output_steps(system, s)
+    return n_steps, int(system.excitation.substeps(s.dt, n_steps)[1].max())
+
+
+def output_steps(system: System, s: Settings) -> int:
+    duration = s.duration if s.duration is not None else system.excitation.duration
+    if duration is None:
+        raise InputError("analysis.duration: required when no record or finite pulse gives it")
+    if s.dt > duration:
+        raise InputError(f"analysis.dt: {s.dt} s is larger than the duration {duration} s")
+    return max(1, math.ceil(duration / s.dt - 1e-9))
+
+
+def compute_times(bounds: np.ndarray, substeps: np.ndarray, dt: float) -> np.ndarray:
+    """Every compute step's end time after t = 0 where output steps bounds[i]..bounds[i + 1]
+    take substeps[i] compute steps each (Excitation.substeps): the resolution at which a run
+    follows its excitation, and at which its response spectra are driven."""
+    parts = [dt * (lo + np.arange(1, (hi - lo) * m + 1) / m)
+             for lo, hi, m in zip(bounds[:-1], bounds[1:], substeps)]
+    return np.concatenate(parts) if parts else np.empty(0)
+
+
+class Rows:
+    """Where a run's rows go: reductions over every step, every ``every``-th row kept or
+    streamed, the columns its error estimate compares at every ``compare_every``-th step,
+    and the response spectra of G and the points at every compute step."""
+
+    def __init__(self, layout: Layout, n_steps: int, every: int, keep: bool, csv=None,
+                 spectra=None, dt: float | None = None, compare_every: int | None = None):
+        """csv: where the written rows also go, a function of the column names that opens a
+        writer (``add(rows)``, ``close()``, ``path``; rbhyst.results.writers.CsvWriter), or None;
+        spectra: (dampings, periods) of the response spectra to stream (Settings.spectra), for
+        rows ``dt`` apart (or as :meth:`add` says); None for none."""
+        self.layout = layout
+        self.every = every
+        self.dt = dt
+        self.extremes = Extremes(layout.names)
+        self.plot = PlotData(n_steps + 1, len(layout.names))
+        # the kept rows, allocated once and column by column (as Layout.table writes them): no
+        # chunk is copied twice, and a column (Result.column, to_pandas) is contiguous
+        n_rows = n_steps // every + 1
+        self._kept = np.empty((len(layout.names), n_rows)).T if keep else None
+        self._csv = csv(layout.names) if csv is not None else None
+        self._next = 0  # global index of the next row
+        # the columns the error estimate compares (rbhyst.solve.estimate), at every compare_every-th step
+        self._compare_columns = np.array([0] + [c for _, c, _ in estimate_columns(layout)])
+        self.compare_every = compare_every or max(1, -(-(n_steps + 1) * len(self._compare_columns) // COMPARE_VALUES))
+        self._compared: list[np.ndarray] = []
+        self.spectra = None
+        if spectra is not None:
+            from rbhyst.solve.located import SpectraSink
+
+            located = body_spectrum_columns(layout)
+            self._spectrum_columns = [c for _, c in located]
+            self.spectra = SpectraSink([label for label, _ in located], *spectra, dt=dt)
+
+    def add(self, raw: Raw, sub: int = 1) -> None:
+        """Rows of consecutive steps; with ``sub`` > 1, rows of every compute step of dt / sub,
+        of which every sub-th (the last of each output step) is an output row: the spectra see
+        them all, everything else the output rows."""
+        n = len(raw.t) // sub
+        direct = self._kept is not None and self.every == 1 and sub == 1
+        table = self.layout.table(raw, out=self._kept[self._next:self._next + n] if direct else None)
+        if self.spectra is not None:  # every compute step, whatever output.every writes
+            self.spectra.update(table[:, self._spectrum_columns], self.dt / sub)
+        if sub > 1:
+            table = table[sub - 1::sub]
+        self.plot.update(table, self.extremes)
+        first = (-self._next) % self.compare_every
+        self._compared.append(table[first::self.compare_every][:, self._compare_columns])
+        first = (-self._next) % self.every
+        written = table[first::self.every]
+        if self._kept is not None and not direct:
+            row = -(-self._next // self.every)  # the first kept row of this chunk
+            self._kept[row:row + len(written)] = written
+        if self._csv is not None:
+            self._csv.add(written)
+        self._next += len(table)
+
+    def body_spectra(self):
+        """The LocatedSpectra of G and the points over every row so far (None without output.spectra)."""
+        return None if self.spectra is None else self.spectra.result()
+
+    @property
+    def compared(self) -> np.ndarray:
+        """(n, 1 + columns): time and the estimate's columns (history.estimate_columns) at every
+        compare_every-th step."""
+        return np.vstack(self._compared)
+
+    @property
+    def csv_path(self):
+        return None if self._csv is None else self._csv.path
+
+    def close(self) -> np.ndarray | None:
+        if self._csv is not None:
+            self._csv.close()
+        if self._kept is None:
+            return None
+        return self._kept[:-(-self._next // self.every)]  # every row, unless the run stopped early
+
+
+def simulate(system: System, s: Settings, keep: bool = True, csv=None) -> Result:
+    """Integrate M q'' + R(q) = p(t) from rest with the chosen method (seed eq. 11).
+
+    keep: hold the written rows in memory (Result.table); csv: stream them to the writer it
+    opens (see :class:`Rows`).
+    """
+    return prepare(system, s).run(keep=keep, csv=csv)
+
+
+def prepare(system: System, s: Settings) -> "Plan":
+    """Check the grid, build the method's coefficients and load its compiled kernel: what a
+    run needs before it writes anything."""
+    method = integrators.get(s.integrator)
+    system = at_rest_under_gravity(system)
+    n_steps, nsub = grid(system, s)
+    if n_steps < s.every:
+        raise InputError(f"output.every: {s.every} is more than the {n_steps} steps of the analysis")
+    if method.solve is not None:
+        return Plan(system, s, method)
+    return _FixedStepPlan(system, s, method)
+
+
+#: more compute steps than this is not an analysis anyone means (hours of time stepping)
+MAX_COMPUTE_STEPS = 10**10
+#: rows kept in memory (rbhyst.run without out=) may take at most this many bytes
+MAX_KEPT_BYTES = 2 * 1024**3
+#: bytes of time_history.csv per value: 10 significant digits, sign, exponent, separator
+CSV_BYTES_PER_VALUE = 16
+#: a CSV larger than this is said before the run starts, with the output.every that keeps it
+#: under SMALL_CSV_BYTES
+LARGE_CSV_BYTES = 1e9
+SMALL_CSV_BYTES = 1e8
+
+
+class Plan:
+    """A run ready to go. This one hands over to a method with a solver of its own."""
+
+    def __init__(self, system: System, s: Settings, method):
+        self.system, self.settings, self.method = system, s, method
+        self.n_steps, self.nsub = grid(system, s)
+
+    def check_size(self, keep: bool, folder=None) -> list[str]:
+        """Refuse, before anything runs, what cannot fit: rows kept in memory beyond
+        MAX_KEPT_BYTES, a CSV larger than the free disk, an absurd number of steps. Returns
+        what to say before it starts: a CSV beyond LARGE_CSV_BYTES, and the output.every that
+        would keep it under SMALL_CSV_BYTES."""
+        import shutil
+        from pathlib import Path
+
+        s = self.settings
+        steps = self.n_steps * self.nsub
+        where = "analysis.duration, analysis.dt"
+        if steps > MAX_COMPUTE_STEPS:
+            raise InputError(f"{where}: {self.n_steps:.3g} steps of {s.dt:g} s ({self.n_steps * s.dt:.4g} s) "
+                             f"{f'x {self.nsub} substeps ' if self.nsub > 1 else ''}is beyond any analysis "
+                             f"(more than {MAX_COMPUTE_STEPS:.0e} steps): shorten analysis.duration")
+        rows = self.n_steps // s.every + 1
+        n_cols = len(Layout(self.system, s.points).names)
+        need = rows * n_cols * CSV_BYTES_PER_VALUE
+        every_for = lambda budget: max(s.every, -(-self.n_steps * n_cols * CSV_BYTES_PER_VALUE // max(int(budget), 1)))
+        if folder is not None:
+            probe = Path(folder)
+            while not probe.exists() and probe != probe.parent:
+                probe = probe.parent
+            free = shutil.disk_usage(probe).free
+            if need > 0.9 * free:
+                raise InputError(
+                    f"{folder}: {where}, output.every: the run would write {rows:.4g} rows of {n_cols} columns "
+                    f"(about {byte_size(need)} of time_history.csv) with {byte_size(free)} free on the folder's "
+                    f"disk: output.every = {every_for(int(0.5 * free))} or a shorter analysis.duration would fit")
+        if keep and rows * n_cols * 8 > MAX_KEPT_BYTES:
+            raise InputError(
+                f"{where}, output.every: keeping {rows:.4g} rows of {n_cols} columns in memory takes "
+                f"{rows * n_cols * 8 / 1e9:.3g} GB: stream them to a folder instead (rbhyst.run(deck, out=...)), "
+                f"or raise output.every (to {every_for(MAX_KEPT_BYTES // 2)} or more)")
+        if folder is not None and need > LARGE_CSV_BYTES:
+            return [f"output: time_history.csv will take about {need / 1e9:.3g} GB ({rows:.4g} rows of {n_cols} "
+                    f"columns); output.every = {every_for(SMALL_CSV_BYTES)} keeps it under "
+                    f"{SMALL_CSV_BYTES / 1e6:.0f} MB (peaks, extremes and spectra still see every step)"]
+        return []
+
+    def run(self, keep: bool = True, csv=None, compare_every: int | None = None, progress=None) -> Result:
+        """``progress(done, total, label)``, if given, hears how far the run is."""
+        if progress is not None:
+            progress(0, 0, f"{self.settings.integrator}: adaptive integration")
+        return self.method.solve(self.system, self.settings, keep=keep, csv=csv)
+
+
+class _FixedStepPlan(Plan):
+    """A fixed-step method in the compiled loop (rbhyst.solve.kernels.loop).
+
+    Each output step k is split into ``substeps[k]`` compute steps where a signal needs it
+    (Excitation.substeps); each distinct split has its own coefficients and K0 substep level.
+    """
+
+    def __init__(self, system: System, s: Settings, method):
+        super().__init__(system, s, method)
+        mass = system.mass
+        self.minv = 1.0 / mass
+        self.cm = np.ascontiguousarray(system.C)
+        self.damped = bool(np.any(self.cm != 0.0))
+        self.bounds, self.substeps = system.excitation.substeps(s.dt, self.n_steps)
+        k0 = system.K0
+        self.coef, self.level0 = {}, {}
+        for nsub in np.unique(self.substeps):
+            h_c = s.dt / nsub
+            level0 = min_level(system, s, method, h_c)
+            # levels below level0 are never used (and may be singular for an extreme K0)
+            self.coef[int(nsub)] = np.stack([method.coefficients(mass, k0, self.cm, h_c / 2**max(lv, level0))
+                                             for lv in range(s.max_substep_level + 1)])
+            self.level0[int(nsub)] = level0
+        self.bvec = np.ascontiguousarray(system.bvec)
+        self.params = np.ascontiguousarray(system.params)
+        self.wgt = (self.bvec * self.bvec) @ self.minv
+        ne = self.bvec.shape[0]
+        self.layout = Layout(system, s.points)
+        self.chunk = min(_chunk_rows(ne, len(self.layout.names), self.nsub), self.n_steps)
+        # load (or compile) the kernel
+        nsub = next(iter(self.coef))
+        self._call(np.zeros((1, 3)), 0.0, nsub, s.dt / nsub, nsub, 0, *self._state(), _Buffers(1, ne))
+
+    def _state(self):
+        """The loop's state at t = 0: at rest, elements virgin, and the initial acceleration."""
+        from rbhyst.model.hysteresis import virgin_tangent
+
+        ne = self.bvec.shape[0]
+        x = np.zeros(N_X)
+        st = np.zeros((2, ne, N_STATE))
+        # virgin elements: u = f = 0 and no branch yet (S = 0), so the first move starts a branch
+        # whatever its direction; until it moves, an element's tangent is the stiffer of its two
+        # first moves, so the monitor sees a stiff body at rest before the first step that moves it
+        for e in range(ne):
+            st[0, e, kernels.K] = max(virgin_tangent(self.params[e], 1.0), virgin_tangent(self.params[e], -1.0))
+        p0 = self.system.excitation.load(np.zeros(1), self.system.mass)[0]
+        static = self.system.static
+        if static is not None:  # at rest at the static equilibrium under gravity, its branches as the path left them
+            st[0] = static.st
+            x[X_D:X_D + 3] = static.q
+            p0 = p0 - static.r
+        x[X_A:X_A + 3] = self.minv * p0  # equilibrium at t = 0: records rarely start at zero
+        x[X_CUR] = 0
+        return x, st
+
+    def _call(self, load, t0, nsub, h_c, rows_every, n, x, st, buf):
+        """n rows of the loop: compute steps of h_c with the coefficients of ``nsub`` substeps a
+        step of dt, a row after every ``rows_every``-th of them."""
+        from rbhyst.solve.kernels.compiled import kernel
+
+        s = self.settings
+        ne = self.bvec.shape[0]
+        self.info = np.zeros(kernels.INFO_SIZE)
+        return kernel("run_chunk")(self.method.kernel_id, self.coef[nsub], self.system.mass, self.minv, self.cm, self.damped,
+                                   self.bvec, self.system.mult, self.params, self.wgt, load,
+                                   t0, h_c, rows_every, n, s.max_omega_dt, self.level0[nsub], s.max_substep_level,
+                                   s.newton_tol, s.newton_max_iter, x, st, np.zeros((ne, N_STATE)), np.zeros((ne, 2)),
+                                   buf.d, buf.v, buf.u, buf.f, buf.e, self.info)
+
+    def segments(self, fine: bool = False):
+        """(first output step, steps, substeps each): runs of equal splitting, at most a chunk of
+        rows long (of compute-step rows where ``fine``)."""
+        for lo, hi, nsub in zip(self.bounds[:-1], self.bounds[1:], self.substeps):
+            chunk = max(1, self.chunk // int(nsub)) if fine else self.chunk
+            for k in range(int(lo), int(hi), chunk):
+                yield k, min(chunk, int(hi) - k), int(nsub)
+
+    def run(self, keep: bool = True, csv=None, compare_every: int | None = None, progress=None) -> Result:
+        system, s = self.system, self.settings
+        ne = self.bvec.shape[0]
+        x, st = self._state()
+        buf = _Buffers(self.chunk, ne)
+        rows = Rows(self.layout, self.n_steps, s.every, keep, csv, spectra=s.spectra, dt=s.dt,
+                    compare_every=compare_every)
+        start_row = Raw(t=np.zeros(1), d=x[None, X_D:X_D + 3].copy(), v=np.zeros((1, 3)),
+                        u=st[None, 0, :, kernels.U].copy(), f=st[None, 0, :, kernels.F].copy(),
+                        e=np.zeros((1, kernels.N_E)))
+        # the spectra see every compute step where the excitation is split (a short pulse's
+        # response between the rows); nothing else does, and without spectra no row is made
+        fine = rows.spectra is not None
+        wall = 0.0
+        try:
+            rows.add(start_row)
+            for first, n, nsub in self.segments(fine):
+                t_c = s.dt * (first + np.arange(n * nsub + 1) / nsub)
+                load = np.ascontiguousarray(system.excitation.load_nodes(t_c, s.dt / nsub, system.mass))
+                sub = nsub if fine else 1
+                tic = time.perf_counter()
+                written = self._call(load, s.dt * first, nsub, s.dt / nsub, nsub // sub, n * sub, x, st, buf)
+                wall += time.perf_counter() - tic
+                _raise_on_failure(system, s, self.info)
+                assert written == n * sub, "the loop wrote fewer rows than asked"
+                t = t_c[1:] if sub > 1 else s.dt * (first + 1 + np.arange(n))  # t_n = n dt, never accumulated
+                m = n * sub
+                rows.add(Raw(t=t, d=buf.d[:m], v=buf.v[:m], u=buf.u[:m], f=buf.f[:m], e=buf.e[:m]), sub=sub)
+                if progress is not None:
+                    progress(first + n, self.n_steps, f"{s.integrator}: time stepping")
+        finally:
+            table = rows.close()
+        stats = RunStats(
+            steps=self.n_steps, record_substeps=self.nsub, min_substep_level=max(self.level0.values()),
+            substeps=int(x[X_SUBSTEPS]), max_substep_level=int(x[X_LEVEL_USED]),
+            max_omega_dt=float(math.sqrt(x[X_OMEGA_DT2])), steps_taken=int(x[X_STEPS]),
+            newton_iterations=int(x[X_ITER]) if self.method.name == "newmark" else 0, wall_s=wall,
+        )
+        return Result(system=system, settings=s, columns=self.layout.names, table=table, extremes=rows.extremes,
+                      plot=rows.plot, stats=stats, layout=self.layout, csv_path=rows.csv_path, compared=rows.compared,
+                      compare_every=rows.compare_every, spectra=run_spectra(system, s, rows.body_spectra()))
+
+
+class _Buffers:
+    """One chunk of the loop's output rows."""
+
+    def __init__(self, n: int, ne: int):
+        self.d = np.empty((n, 3))
+        self.v = np.empty((n, 3))
+        self.u = np.empty((n, ne))
+        self.f = np.empty((n, ne))
+        self.e = np.empty((n, kernels.N_E))
+
+
+def run_spectra(system: System, s: Settings, body):
+    """The run's LocatedSpectra: the ground's, from its signals themselves (rbhyst.solve.ground),
+    and the body's (G and the points) as the rows drove them; None without output.spectra."""
+    if body is None:
+        return None
+    from rbhyst.solve.ground import ground_spectra
+
+    n_steps = output_steps(system, s)
+    return ground_spectra(system.excitation, n_steps * s.dt, *s.spectra).joined(body)
+
+
+def _chunk_rows(ne: int, n_cols: int, nsub: int) -> int:
+    """Output steps per chunk: CHUNK_BYTES of raw rows, table rows and load."""
+    per_row = 8 * (9 + 2 * ne + kernels.N_E + n_cols + 3 * nsub)
+    return int(min(65_536, max(64, CHUNK_BYTES // per_row)))
+
+
+def min_level(system: System, s: Settings, method, h: float) -> int:
+    """Substep level that a structure-dependent method needs for omega_0 h <= the limit.
+
+    Chang's displacement predictor scales the step's motion by (1 + (omega_0 h)^2 / 4)^-1
+    where the tangent is softer than K0: accurate only while omega_0 h is small, whatever
+    the current stiffness. omega_0^2 = max eig(M^-1 K0).
+    """
+    if not method.structure_dependent:
+        return 0
+    m = 1.0 / np.sqrt(system.mass)
+    w0 = float(np.sqrt(np.max(np.linalg.eigvalsh(system.K0 * np.outer(m, m)))))
+    level = max(0, math.ceil(math.log2(w0 * h / s.max_omega_dt))) if w0 * h > s.max_omega_dt else 0
+    if level > s.max_substep_level:
+        raise AnalysisError(
+            f"omega_0 = {w0:.4g} rad/s of K0 (the elements' stiffness away from reversals) needs steps of "
+            f"{s.max_omega_dt / w0:.3g} s with {s.integrator!r}: more than {2**s.max_substep_level} "
+            f"substeps of dt = {s.dt:g} s; dt = {s.max_omega_dt / w0 * 2**s.max_substep_level:.3g} s would do "
+            "(or a stiffer body is an input mistake: check the mass and kb)"
+        )
+    return level
+
+
+def _element_name(system: System, row: int) -> str:
+    """'element e3' or 'elements e3, e4, e7' (CSV numbers) with the first one's place (deck frame)."""
+    numbers = system.row_elements(row)
+    el = next(el for el in system.elements if el.row == row)
+    g = system.body.mass_centre
+    span = ("element " if len(numbers) == 1 else "elements ") + ", ".join(f"e{k}" for k in numbers)
+    return f"{span} ({el.hysteresis!r} at ({el.x[0] + g[0]:.4g}, {el.x[1] + g[1]:.4g}) m, {el.angle_deg:g} deg)"
+
+
+#: an exponential term that has grown beyond e^this has left any calibrated range
+EXP_RANGE = 20.0
+
+
+def _raise_on_failure(system: System, s: Settings, info: np.ndarray) -> None:
+    status = int(info[kernels.I_STATUS])
+    if status == kernels.OK:
+        return
+    t = info[kernels.I_TIME]
+    e = int(info[kernels.I_ELEMENT])
+    if status == kernels.OVERFLOW:
+        p = system.params[e]
+        raise AnalysisError(
+            f"t = {t:.6g} s: {_element_name(system, e)} left its calibrated range: "
+            f"beta2 u exceeded {700:g} (beta2 = {p[0, 4]:g}, {p[1, 4]:g} 1/m), so its force would overflow"
+        )
+    if status == kernels.UNRESOLVED:
+        omega = info[kernels.I_OMEGA]
+        k = info[kernels.I_STIFFNESS]
+        u = info[kernels.I_DISP]
+        p = system.params[e]
+        row = 0 if info[kernels.I_BRANCH] > 0 else 1
+        b1, b2 = p[row, 3], p[row, 4]
+        if b1 != 0.0 and b2 * u > EXP_RANGE:
+            raise AnalysisError(
+                f"t = {t:.6g} s: {_element_name(system, e)} is driven to u = {u:.4g} m, where its term "
+                f"beta1 e^(beta2 u) (beta2 = {b2:g} 1/m) has grown by e^{b2 * u:.3g} and its stiffness to "
+                f"{k:.4g} N/m: beta2 is out of range for this motion (no step can follow it, and no "
+                "calibration reaches that far); check the set's beta2 and the deck's units"
+            )
+        raise AnalysisError(
+            f"t = {t:.6g} s: {_element_name(system, e)} reached a tangent stiffness of {k:.4g} N/m "
+            f"(omega_max = {omega:.4g} rad/s), which {2**s.max_substep_level} substeps of "
+            f"dt = {s.dt:g} s cannot resolve; a step of {s.max_omega_dt / omega:.3g} s "
+            "would (or raise analysis.max_substep_level)"
+        )
+    if status == kernels.NOT_CONVERGED:
+        raise AnalysisError(
+            f"t = {t:.6g} s: Newton iterations of {s.integrator!r} did not converge to "
+            f"{s.newton_tol:g} in {s.newton_max_iter} iterations, even with {2**s.max_substep_level} "
+            f"substeps of dt = {s.dt:g} s; reduce dt or use an explicit integrator"
+        )
+    raise AnalysisError(
+        f"t = {t:.6g} s: the solution is no longer finite (NaN or Inf); the scene is numerically "
+        f"unstable at dt = {s.dt:g} s with {s.integrator!r}"
+    )

@@ -1,0 +1,93 @@
+"""The static equilibrium under gravity, reached along the elements' branches from their virgin state.
+
+The weight W = m (g1, g2, 0) acts at G. It is applied in increments of W / INCREMENTS; at each,
+Newton iterations with the elements' closed-form tangents (seed eq. 16) solve R(q) = lambda W,
+every element advancing along its VRM branch from where the previous increment left it (eq. 14
+from the committed state): a quasi-static path with no dynamic drop, exact for the VRM up to the
+iterations' tolerance, and leaving each element's branch memory where the dynamic run picks it
+up. The displacements a run reports are measured from this equilibrium (seed section 2.2).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from rbhyst.solve.kernels import layout as kernels
+from rbhyst.errors import AnalysisError
+
+INCREMENTS = 50
+MAX_ITERATIONS = 50
+#: converged when the out-of-balance force is below this fraction of the weight
+TOLERANCE = 1e-13
+
+
+@dataclass(frozen=True)
+class Static:
+    q: np.ndarray  # (3,) u1, u2, theta3 of G at equilibrium, from the virgin state
+    st: np.ndarray  # (rows, 6) element-row states there (U, F, S, G, K, A)
+    r: np.ndarray  # (3,) the elements' resultant there: the load that holds the body at rest
+    residual: float  # |W - R| / |W|
+    iterations: int
+
+
+def static_equilibrium(system) -> Static:
+    """Equilibrium under system.weight (see the module docstring); AnalysisError where the elements
+    cannot carry it (their tangent stiffness vanishes or Newton does not converge)."""
+    from rbhyst.model.hysteresis import virgin_tangent
+    from rbhyst.solve.kernels.elements import update_elements
+
+    w = np.asarray(system.weight, dtype=float)
+    bvec = np.ascontiguousarray(system.bvec)
+    params = np.ascontiguousarray(system.params)
+    mult = system.mult
+    ne = bvec.shape[0]
+    st = np.zeros((2, ne, kernels.N_STATE))
+    for e in range(ne):
+        st[0, e, kernels.K] = max(virgin_tangent(params[e], 1.0), virgin_tangent(params[e], -1.0))
+    kpeak = np.zeros((ne, 2))
+    cur = 0
+    q = np.zeros(3)
+    scale = max(float(np.max(np.abs(w))), 1e-300)
+    total = 0
+    r = np.zeros(3)
+    for k in range(1, INCREMENTS + 1):
+        target = w * (k / INCREMENTS)
+        for it in range(MAX_ITERATIONS):
+            ok, bad, _, r0, r1, r2 = update_elements(bvec, mult, params, q[0], q[1], q[2], st, cur, kpeak)
+            if not ok:
+                raise AnalysisError(f"static equilibrium under gravity: element row {bad + 1} left its calibrated "
+                                    "range (exp overflow): the elements cannot carry the weight")
+            r = np.array([r0, r1, r2])
+            res = target - r
+            total += 1
+            if np.max(np.abs(res)) <= TOLERANCE * scale:
+                break
+            kt = (bvec.T * (mult * kpeak[:, 1])) @ bvec
+            try:
+                dq = np.linalg.solve(kt, res)
+            except np.linalg.LinAlgError:
+                dq = np.full(3, np.nan)
+            if not np.all(np.isfinite(dq)):
+                raise AnalysisError(f"static equilibrium under gravity: at {k / INCREMENTS:.0%} of the weight the "
+                                    "elements' tangent stiffness is singular: they cannot carry it")
+            q = q + dq
+        else:
+            raise AnalysisError(f"static equilibrium under gravity: Newton iterations did not converge at "
+                                f"{k / INCREMENTS:.0%} of the weight (out of balance {np.max(np.abs(res)):.3g} N): "
+                                "the elements cannot carry it")
+        cur = 1 - cur  # the trial state becomes the committed one
+    return Static(q=q, st=st[cur].copy(), r=r, residual=float(np.max(np.abs(w - r)) / scale), iterations=total)
+
+
+def at_rest_under_gravity(system):
+    """The system with its static equilibrium found and the weight in its load (no weight: itself)."""
+    if system.weight is None or system.static is not None:
+        return system
+    from dataclasses import replace
+
+    st = static_equilibrium(system)
+    # the load that holds the body exactly at rest there is the elements' resultant (the
+    # weight to within the iterations' 1e-13): without excitation, rest stays rest to the bit
+    return replace(system, static=st, excitation=replace(system.excitation, constant=tuple(map(float, st.r))))
