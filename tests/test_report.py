@@ -184,7 +184,7 @@ def sweep_folder(tmp_path_factory):
     folder = tmp_path_factory.mktemp("sweep_report")
     shutil.copytree(DECKS / "records", folder / "records")
     d = tomllib.loads((DECKS / "seed_wri.toml").read_text())
-    d["analysis"].update(duration=2.0, estimate_error=False)
+    d["analysis"].update(duration=2.0)
     (folder / "deck.toml").write_text(tomli_w.dumps(d))
     x1 = {"file": "records/synthetic_x1.csv", "units": "g"}
     x2 = {"file": "records/synthetic_x2.csv", "units": "g"}
@@ -204,6 +204,7 @@ def test_a_sweep_report_holds_its_statistics_and_fragility(sweep_folder):
     page = check_page(sweep_folder)
     srcs = {a["data-src"].split(":")[0] for a, _ in page.numbers}
     assert {"sweep.json", "stats.csv", "fragility.csv", "cases.csv"} <= srcs
+    assert any("accuracy_estimated_error_" in a["data-src"] for a, _ in page.numbers)  # the worst case's
     text = " ".join(page.text)
     assert "no case reaches the limit (0 of 6" in text  # a refused curve says why
     assert "fragility.png" in {i["data-file"] for i in page.images}

@@ -16,9 +16,10 @@ from pathlib import Path
 
 from rbhyst._version import __version__
 from rbhyst.errors import InputError
+from rbhyst.model.deck import ACCEL_UNITS
 
 REPORT_FILE = "report.html"
-G = 9.80665  # m/s2 (a g column beside m/s2 only; every value in m/s2 is summary.json's)
+G = ACCEL_UNITS["g"]  # m/s2 (a g column beside m/s2 only; every value in m/s2 is summary.json's)
 
 #: a run's figures in the order the report shows them (others the folder lists follow)
 RUN_FIGURES = ("support_motion.png", "response_x1.png", "response_x2.png", "response_theta3.png",
@@ -527,6 +528,7 @@ def sweep_report(folder: Path, owned: set[str]) -> str:
                                                            [[r[ci["case"]], r[ci["motion"]], r[ci["scale"]],
                                                              *[r[ci[k]] for k in vary], r[ci["message"]]]
                                                             for r in warned]))
+    body.append(_sweep_accuracy(c_head, c_rows))
     body.append(_statistics(folder, vary))
     if "fragility.csv" in owned and (folder / "fragility.csv").is_file():
         body.append(_fragility(folder, owned, about.get("fragility") or {}, vary))
@@ -538,6 +540,26 @@ def sweep_report(folder: Path, owned: set[str]) -> str:
     return page(f"Sweep {about.get('sweep', '')}",
                 f"{about.get('deck', '')} over {len(about.get('motions', []))} motions, rbhyst "
                 f"{about.get('rbhyst_version', '')}: results in {folder.name}/", body)
+
+
+def _sweep_accuracy(head: list[str], rows: list[list[str]]) -> str:
+    """The largest estimated error over every case and output (cases.csv's accuracy_ columns)."""
+    prefix = "accuracy_estimated_error_"
+    cols = [(k, h) for k, h in enumerate(head) if h.startswith(prefix)]
+    status = head.index("status")
+    ok = [(n, r) for n, r in enumerate(rows) if r[status] == "ok"]
+    found = [(float(r[k]), n, r, h) for n, r in ok for k, h in cols if r[k] != ""]
+    bare = sum(1 for _, r in ok if all(r[k] == "" for k, _ in cols))
+    out = ["<h2>Accuracy</h2>"]
+    if found:
+        v, n, r, h = max(found, key=lambda x: x[0])
+        out.append(f"<p>The largest estimated error over every case and output is "
+                   f"{num(v, f'cases.csv:{n}:{h}', 'pct', 'span')} (case {esc(r[0])}, {esc(h[len(prefix):])}); "
+                   "each case's are in cases.csv (accuracy_estimated_error_*).</p>")
+    if bare:
+        out.append(f'<p class="bad">{bare} of {len(ok)} cases were run without an error estimate '
+                   "(analysis.estimate_error = false): nothing vouches for their accuracy.</p>")
+    return "<section>" + "".join(out) + "</section>" if len(out) > 1 else ""
 
 
 def _statistics(folder: Path, vary: list[str]) -> str:
