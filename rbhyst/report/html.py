@@ -43,6 +43,7 @@ table { border-collapse: collapse; margin: 6px 0 14px; font-size: 12.5px; }
 div.wide { overflow-x: auto; }
 th, td { border-bottom: 1px solid var(--rule); padding: 3px 9px; text-align: left; vertical-align: top; }
 th { background: #f3f5f7; font-weight: 600; }
+td:first-child { white-space: nowrap; }
 td.num, th.num { text-align: right; font-variant-numeric: tabular-nums; white-space: nowrap; }
 .glance { display: grid; grid-template-columns: repeat(auto-fill, minmax(200px, 1fr)); gap: 8px; margin: 10px 0; }
 .glance div { background: var(--note); border-radius: 6px; padding: 8px 10px; }
@@ -105,12 +106,13 @@ def num(v, src: str, kind: str = "g", tag: str = "td") -> str:
 def table(header: list[str], rows: list[list[str]], numeric: set[int] = frozenset()) -> str:
     """rows: cells already rendered (<td>...</td>) or plain text (escaped here)."""
     head = "".join(f'<th class="num">{esc(h)}</th>' if i in numeric else f"<th>{esc(h)}</th>"
-                   for i, h in enumerate(header))
+                   for i, h in enumerate(header)) if any(header) else ""
     body = []
     for r in rows:
         cells = "".join(c if isinstance(c, str) and c.startswith("<td") else f"<td>{esc(c)}</td>" for c in r)
         body.append(f"<tr>{cells}</tr>")
-    return f'<div class="wide"><table><thead><tr>{head}</tr></thead><tbody>{"".join(body)}</tbody></table></div>'
+    thead = f"<thead><tr>{head}</tr></thead>" if head else ""  # (a table of keys and values has no header)
+    return f'<div class="wide"><table>{thead}<tbody>{"".join(body)}</tbody></table></div>'
 
 
 def figure(folder: Path, name: str, caption: str = "") -> str:
