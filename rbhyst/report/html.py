@@ -217,7 +217,7 @@ def write_report(folder: str | Path) -> Path:
 
     folder = Path(folder)
     if not folder.is_dir():
-        raise InputError(f"{folder}: no such folder")
+        raise InputError(f"{folder}: {'is not a folder' if folder.exists() else 'no such folder'}")
     owned = read_manifest(folder).files
     if {"summary.json", "time_history.csv"} <= owned and (folder / "summary.json").is_file():
         text = run_report(folder, owned)
