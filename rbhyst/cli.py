@@ -101,6 +101,10 @@ def run(
     for warning in result.warnings:
         say(f"warning: {warning}")
     say(run_line(result))
+    from rbhyst.report.console import element_table
+
+    for line in element_table(result.summary()):
+        say(line)
     say(f"wrote {target}")
 
 
@@ -397,9 +401,11 @@ def sweep(
             from rbhyst.report.html import check_report_target
 
             check_report_target(target)
+        from rbhyst.solve.kernels.compiled import ahead_of_time
         from rbhyst.solve.kernels.loop import run_chunk
 
-        if scheduler is None and not kernels.cached([run_chunk]):
+        # built at install, the kernels need no compiling (and numba's cache stays empty)
+        if scheduler is None and not ahead_of_time() and not kernels.cached([run_chunk]):
             say("note: compiling the numba kernels, once (a minute at most); the workers load them from the cache")
             from rbhyst.api import run as _run
 

@@ -108,3 +108,27 @@ def test_the_check_finds_a_cycle_and_an_upward_import():
     assert cycles(g) == [["rbhyst.model.a", "rbhyst.model.b"]]
     assert layer("rbhyst.solve.kernels.loop") == 3 > layer("rbhyst.model.deck") == 2
     assert layer("rbhyst.cli") == layer("rbhyst.sweep") == TOP
+
+
+def test_the_kernels_build_with_numpy_and_numba_alone():
+    """setup.py compiles the kernels where only the build's requirements are installed: the
+    modules they come from must not import the deck's or the report's dependencies."""
+    import subprocess
+    import sys
+
+    code = """
+import builtins, importlib
+real = builtins.__import__
+def guard(name, *args, **kwargs):
+    if name.split('.')[0] in ('yaml', 'pydantic', 'pydantic_core', 'scipy', 'matplotlib', 'typer', 'tomli_w', 'rich'):
+        raise ImportError('not in the build environment: ' + name)
+    return real(name, *args, **kwargs)
+builtins.__import__ = guard
+from rbhyst.solve.kernels.aot import EXPORTS, source_stamp
+for module, _, _ in EXPORTS.values():
+    importlib.import_module(module)
+source_stamp()
+"""
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          cwd=PACKAGE.parent)
+    assert done.returncode == 0, done.stderr

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from pathlib import Path
 
@@ -70,4 +71,4 @@ def record_spectrum(path: Path, units: str, dt: float | None = None, dampings=(0
     sink.update(acc[:, None])
     if free_vibration:
         sink.update(np.zeros((rest_samples(periods, dampings, rec.series.dt), 1)))
-    return sink.result()
+    return dataclasses.replace(sink.result(), record_dt=((direction, float(rec.series.dt)),))

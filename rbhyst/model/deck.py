@@ -20,6 +20,7 @@ from pydantic import (BaseModel, ConfigDict, Discriminator, Field, PrivateAttr, 
 from pydantic_core import PydanticCustomError
 
 from rbhyst.errors import InputError
+from rbhyst.model.integrators import INTEGRATORS
 from rbhyst.model.periods import default_periods
 from rbhyst.files.textfiles import read_text
 from rbhyst.model.hysteresis import limiting_curve, limiting_slope, parameter_set, reversal_stiffness
@@ -35,9 +36,6 @@ AccelUnits = Literal["g", "m/s2", "cm/s2"]
 ForceUnits = Literal["N", "kN"]
 MomentUnits = Literal["N m", "kN m"]
 U = TypeVar("U")
-
-#: the integrators by name (rbhyst.solve.integrators implements each), the default first
-INTEGRATORS = ("chang", "central-difference", "newmark", "kr-alpha", "reference", "adaptive")
 
 
 class _Model(BaseModel):
@@ -500,6 +498,59 @@ def split_key(key: str) -> list[str | int]:
     if not parts or pos != len(key):
         raise KeyError("cannot read the key")
     return parts
+
+
+#: the unit of each deck key with one, by its path with list indices left out ("*": any name);
+#: "" a pure number (a ratio, a count), "signal" the units of the signal it belongs to
+KEY_UNITS: dict[tuple[str, ...], str] = {
+    ("body", "mass"): "kg", ("body", "inertia"): "kg m²", ("body", "vertices"): "m",
+    ("body", "mass_centre"): "m", ("body", "gravity"): "m/s²",
+    ("body", "parts", "mass"): "kg", ("body", "parts", "vertices"): "m",
+    **{("hysteresis", "*", "*", name): unit for name, unit in (
+        ("kb", "N/m"), ("f0", "N"), ("alpha", "1/m"), ("beta1", "N"), ("beta2", "1/m"), ("gamma1", "N"),
+        ("gamma2", "1/m"), ("gamma3", "m"))},
+    **{(group, name): unit for group in ("elements", "dampers") for name, unit in (
+        ("angle_deg", "°"), ("point", "m"), ("count", ""), ("vertex", ""), ("part", ""))},
+    ("elements", "stroke"): "m", ("dampers", "c"): "N s/m",
+    **{(*group, "*", name): unit for group in (("excitation", "support"), ("excitation", "force"))
+       for name, unit in (("amplitude", "signal"), ("scale", ""), ("frequency_hz", "Hz"), ("phase_deg", "°"),
+                          ("start", "s"), ("duration", "s"), ("dt", "s"), ("cycles", ""), ("ramp_cycles", ""))},
+    ("excitation", "force", "point"): "m",
+    ("analysis", "dt"): "s", ("analysis", "duration"): "s", ("analysis", "max_omega_dt"): "",
+    ("analysis", "max_substep_level"): "", ("analysis", "rtol"): "", ("analysis", "tolerance"): "",
+    ("analysis", "warn_error"): "", ("output", "every"): "", ("output", "spectra", "damping"): "",
+    ("output", "spectra", "periods_s"): "s", ("output", "points", "point"): "m",
+    ("loops", "amplitude"): "m", ("loops", "frequency_hz"): "Hz", ("loops", "cycles"): "",
+    ("loops", "points_per_cycle"): "",
+}
+#: units as written in a deck, as an axis shows them
+_SHOWN_UNITS = {"m/s2": "m/s²", "cm/s2": "cm/s²"}
+
+
+def key_unit(key: str, data: dict | None = None) -> str | None:
+    """The unit of a dotted deck key (``"body.mass"`` -> ``"kg"``, ``"elements[2].count"`` ->
+    ``""``), None where it has none to tell (a name, a key rbhyst does not know). A signal's
+    ``amplitude`` takes the ``units`` beside it in ``data`` (the deck as a mapping)."""
+    try:
+        parts = split_key(key)
+    except KeyError:
+        return None
+    names = tuple(p for p in parts if isinstance(p, str))
+    for pattern, unit in KEY_UNITS.items():
+        if len(pattern) == len(names) and all(a in ("*", b) for a, b in zip(pattern, names)):
+            break
+    else:
+        return None
+    if unit != "signal":
+        return unit
+    node: Any = data
+    for part in parts[:-1]:
+        try:
+            node = node[part]
+        except (KeyError, IndexError, TypeError):
+            return None
+    units = node.get("units") if isinstance(node, dict) else None
+    return _SHOWN_UNITS.get(units, units) if isinstance(units, str) else None
 
 
 def set_dotted(data: dict, key: str, value: Any) -> None:

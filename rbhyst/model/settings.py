@@ -5,6 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from rbhyst.errors import InputError
+from rbhyst.model.integrators import INTEGRATORS
 
 
 @dataclass(frozen=True)
@@ -35,7 +36,7 @@ class Settings:
 def settings_from_deck(deck, integrator: str | None = None, dt: float | None = None,
                        tolerance: float | None = None) -> Settings:
     """The deck's [analysis] and output.every, with command-line overrides validated like the deck."""
-    from rbhyst.model.deck import INTEGRATORS, check_runnable
+    from rbhyst.model.deck import check_runnable
 
     check_runnable(deck)
     a = deck.analysis

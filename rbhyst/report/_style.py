@@ -11,6 +11,7 @@ import functools
 
 import matplotlib
 from matplotlib.figure import Figure
+from matplotlib.ticker import LogFormatter
 
 STYLE = {
     "figure.dpi": 110,
@@ -62,3 +63,34 @@ def save(fig, path, margins: tuple[float, float, float, float, float] | None = N
         fig.subplots_adjust(left=left / w, right=1 - right / w, bottom=bottom / h, top=1 - top / h,
                             hspace=gap / height)
     fig.savefig(path)
+
+
+class PlainLogFormatter(LogFormatter):
+    """Tick labels of a log axis as plain numbers: 0.01, 0.2, 5, 100 (never 2x10^0 nor 10^-2).
+
+    Which ticks get a label is LogFormatter's choice (every decade; over a decade or two also
+    2, 3, 4, 6 or every multiple of it); the text is a decimal from 1e-4 to 1e6 and e-notation
+    beyond (1e-5)."""
+
+    def __init__(self):
+        super().__init__(labelOnlyBase=False)
+
+    def __call__(self, x, pos=None):
+        if not super().__call__(x, pos):
+            return ""
+        return self.fix_minus(plain_number(x))
+
+
+def plain_number(x: float) -> str:
+    text = f"{x:.6g}"
+    if "e" in text:  # 1e-05 -> 1e-5, 2e+06 -> 2e6
+        mantissa, exponent = text.split("e")
+        text = f"{mantissa}e{int(exponent)}"
+    return text
+
+
+def plain_log_ticks(axis) -> None:
+    """Plain labels on a log-scaled axis (ax.xaxis, ax.yaxis), major and minor ticks; call it
+    after the axis is made logarithmic (set_xscale resets the formatters)."""
+    axis.set_major_formatter(PlainLogFormatter())
+    axis.set_minor_formatter(PlainLogFormatter())

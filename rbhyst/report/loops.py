@@ -11,6 +11,9 @@ from rbhyst.analyses.calibration import LoopResult
 from rbhyst.model.hysteresis import limiting_curve
 from rbhyst.report._style import save, styled, subplots
 
+#: at most about this many markers on a measured loop (every point would merge into a band)
+DATA_MARKERS = 300
+
 
 def _display_units(u_max: float, f_max: float) -> tuple[str, float, str, float]:
     """Readable units for data in m and N: mm below 0.1 m, kN from 1 kN."""
@@ -21,11 +24,11 @@ def _display_units(u_max: float, f_max: float) -> tuple[str, float, str, float]:
 
 @styled
 def plot_loops(results: list[LoopResult], path: Path, title: str | None = None,
-               initial: dict[str, np.ndarray] | None = None) -> None:
+               initial: dict[str, np.ndarray] | None = None):
     """Model loops (and measured ones when present) with the limiting curves c+ and c-.
 
     ``initial`` maps set names to a parameter set drawn as a dotted line (the starting
-    point of a calibration).
+    point of a calibration). Returns the figure (saved to ``path``).
     """
     n = len(results)
     cols = 1 if n == 1 else 2
@@ -39,8 +42,6 @@ def plot_loops(results: list[LoopResult], path: Path, title: str | None = None,
             with np.errstate(over="ignore"):
                 c = limiting_curve(res.p, s, ug)
             ax.plot(ug * u_fac, c * f_fac, ls, color="0.55", lw=0.9, label=f"c{'+' if s > 0 else '-'}(u)")
-        if res.f_data is not None:
-            ax.plot(res.u * u_fac, res.f_data * f_fac, color="0.15", lw=0.8, alpha=0.8, label="test data")
         if initial is not None and res.name in initial:
             from rbhyst.model.vrm import loop
 
@@ -49,7 +50,15 @@ def plot_loops(results: list[LoopResult], path: Path, title: str | None = None,
                 ax.plot(res.u * u_fac, f0 * f_fac, color="C1", lw=0.8, ls="-.", label="initial set")
             except OverflowError:
                 pass
-        ax.plot(res.u * u_fac, res.f * f_fac, color="C0", lw=1.3, label="VRM")
+        if res.f_data is None:
+            ax.plot(res.u * u_fac, res.f * f_fac, color="C0", lw=1.3, label="VRM")
+        else:
+            # the model as a broad light band under the measurement's open markers (every n-th
+            # point): where they agree the markers sit on the band, where they differ both show
+            ax.plot(res.u * u_fac, res.f * f_fac, color="C0", lw=2.4, alpha=0.7, zorder=3,
+                    label="VRM fit" if initial is not None else "VRM")
+            ax.plot(res.u * u_fac, res.f_data * f_fac, color="0.1", ls="none", marker="o", ms=2.8, mfc="none",
+                    mew=0.6, markevery=max(1, len(res.u) // DATA_MARKERS), zorder=4, label="test data")
         lo, hi = f_all.min(), f_all.max()
         pad = 0.08 * (hi - lo if hi > lo else 1.0)
         ax.set_ylim((lo - pad) * f_fac, (hi + pad) * f_fac)
@@ -76,3 +85,4 @@ def plot_loops(results: list[LoopResult], path: Path, title: str | None = None,
     if title:
         fig.suptitle(title, fontsize=10)
     save(fig, path)
+    return fig

@@ -6,26 +6,49 @@ import math
 from pathlib import Path
 
 import numpy as np
+from matplotlib.ticker import MaxNLocator
 
 from rbhyst.solve.result import Result
-from rbhyst.report._style import TIME_MARGINS, save, styled, subplots
+from rbhyst.report._labels import Labels
+from rbhyst.report._style import TIME_MARGINS, plain_number, save, styled, subplots
 
 
-def _draw_outline(ax, v: np.ndarray, fill_alpha: float, labels: list[str]) -> None:
+def _draw_outline(ax, v: np.ndarray, fill_alpha: float, labels: list[str], placer: Labels) -> None:
+    """The polygon, each vertex labelled outside it, along the bisector of its corner if that
+    place is free."""
     closed = np.vstack([v, v[:1]])
     ax.fill(closed[:, 0], closed[:, 1], color="0.2", alpha=fill_alpha, lw=0, zorder=1)
     ax.plot(closed[:, 0], closed[:, 1], color="0.2", lw=1.2, zorder=2)
-    for label, (x, y) in zip(labels, v):
-        ax.annotate(label, (x, y), textcoords="offset points", xytext=(4, 4), fontsize=8, color="0.3")
+    placer.line(closed)
+    n = len(v)
+    for i, (label, point) in enumerate(zip(labels, v)):
+        into = []  # unit vectors along the two edges that meet here
+        for j in (i - 1, (i + 1) % n):
+            e = v[j] - point
+            into.append(e / (np.linalg.norm(e) or 1.0))
+        out = -(into[0] + into[1])
+        if np.linalg.norm(out) < 1e-9:  # a straight angle: outward is the normal of the edge
+            out = np.array([into[1][1], -into[1][0]])
+        placer.add(label, point, out, fontsize=8, color="0.3")
+
+
+def _shares_line(dp, elements) -> bool:
+    """Whether an element acts at the damper's point along the same line (their drawings
+    would fall on each other)."""
+    return any(math.dist(el.x, dp.x) < 1e-9 and abs(math.sin(math.radians(el.angle_deg - dp.angle_deg))) < 1e-6
+               for el in elements)
 
 
 @styled
-def plot_body(result: Result, path: Path) -> None:
+def plot_body(result: Result, path: Path):
     """The body (every part, the denser darker, with its mass), its mass centre G and its
-    elements (seed Fig. 3a)."""
+    elements (seed Fig. 3a); a damper on an element's line is drawn beside it, in parallel;
+    no label covers another (rbhyst.report._labels). Returns the figure (saved to ``path``)."""
     system = result.system
     body = system.body
     fig, ax = subplots(figsize=(5.5, 5.5))
+    vertex_labels, labels = Labels(), Labels()  # the elements' and dampers' labels first
+    fixed = []
     if body.form == "parts":
         # overlapping fills add up: a dense unit inside a shell shows darker
         density = [p.mass / p.area for p in body.parts]
@@ -33,15 +56,15 @@ def plot_body(result: Result, path: Path) -> None:
         for k, (part, rho) in enumerate(zip(body.parts, density), start=1):
             prefix = f"{k}." if several else "P"
             _draw_outline(ax, part.vertices, 0.08 + 0.3 * rho / max(density),
-                          [f"{prefix}{i}" for i in range(1, len(part.vertices) + 1)])
+                          [f"{prefix}{i}" for i in range(1, len(part.vertices) + 1)], vertex_labels)
             c = part.centroid - body.mass_centre
-            ax.annotate(f"part {k}\n{part.mass:.4g} kg", c, ha="center", va="center", fontsize=7,
-                        color="0.1", zorder=3)
+            fixed.append(ax.annotate(f"part {k}\n{part.mass:.4g} kg", c, ha="center", va="center", fontsize=7,
+                                     color="0.1", zorder=3))
     else:
         v = body.outlines[0]
-        _draw_outline(ax, v, 0.1, [f"P{i}" for i in range(1, len(v) + 1)])
+        _draw_outline(ax, v, 0.1, [f"P{i}" for i in range(1, len(v) + 1)], vertex_labels)
     ax.plot(0, 0, "k+", ms=10, zorder=3)
-    ax.annotate("G", (0, 0), textcoords="offset points", xytext=(5, -10))
+    labels.point(0.0, 0.0, 5.0)
     v = np.vstack(body.outlines)
     size = float(np.ptp(v, axis=0).max())
     length = 0.18 * size
@@ -51,25 +74,42 @@ def plot_body(result: Result, path: Path) -> None:
         a = math.radians(el.angle_deg)
         # along its line of action, on the side away from G: clear of the body's outline
         side = 1.0 if x * math.cos(a) + y * math.sin(a) >= 0.0 else -1.0
-        ex, ey = x + side * length * math.cos(a), y + side * length * math.sin(a)
+        ux, uy = side * math.cos(a), side * math.sin(a)
+        ex, ey = x + length * ux, y + length * uy
         ax.plot([ex, x], [ey, y], color="C0", lw=2.5, solid_capstyle="round", zorder=4)
         ax.plot(ex, ey, marker="s", color="C0", ms=5, zorder=4)
+        labels.line([[x, y], [ex, ey]])
+        labels.point(ex, ey, 2.5)
         label = f"e{k}" if el.count == 1 else f"e{k}-{k + el.count - 1}"
-        ax.annotate(label, (ex, ey), textcoords="offset points", xytext=(-6, -11), fontsize=7, color="C0")
+        labels.add(label, (ex, ey), (ux, uy), 4.5, fontsize=7, color="C0")  # beyond its free end
         k += el.count
     for k, dp in enumerate(system.dampers, start=1):
         x, y = dp.x
         a = math.radians(dp.angle_deg)
         side = 1.0 if x * math.cos(a) + y * math.sin(a) >= 0.0 else -1.0
-        ex, ey = x + side * 0.8 * length * math.cos(a), y + side * 0.8 * length * math.sin(a)
-        ax.plot([ex, x], [ey, y], color="C2", lw=1.5, ls="--", zorder=4)
-        ax.plot((ex + x) / 2, (ey + y) / 2, marker="D", color="C2", ms=5, zorder=4)
-        ax.annotate(f"d{k}" + (f" x{dp.count}" if dp.count > 1 else ""), (ex, ey), textcoords="offset points",
-                    xytext=(3, 3), fontsize=7, color="C2")
+        ux, uy = side * math.cos(a), side * math.sin(a)
+        # on an element's line it is drawn beside it, in parallel, as a spring and a dashpot are
+        nx, ny = -uy, ux
+        if nx * x + ny * y < 0.0:  # the side away from G
+            nx, ny = -nx, -ny
+        shift = 0.06 * size if _shares_line(dp, system.elements) else 0.0
+        sx, sy = x + shift * nx, y + shift * ny
+        ex, ey = sx + 0.8 * length * ux, sy + 0.8 * length * uy
+        ax.plot([x, sx, ex], [y, sy, ey], color="C2", lw=1.5, ls="--", zorder=4)
+        mid = ((ex + sx) / 2, (ey + sy) / 2)
+        ax.plot(*mid, marker="D", color="C2", ms=5, zorder=4)
+        labels.line([[x, y], [sx, sy], [ex, ey]])
+        labels.point(*mid, 2.5)
+        labels.add(f"d{k}" + (f" x{dp.count}" if dp.count > 1 else ""), mid, (nx, ny), 4.5, fontsize=7,
+                   color="C2")  # off its side, away from the element
+    labels.pending += vertex_labels.pending
+    labels.lines += vertex_labels.lines
+    labels.add("G", (0.0, 0.0), (1.0, -1.0), 5.0, fontsize=9)
     ex = result.system.excitation
     if ex.p1 is not None or ex.p2 is not None or ex.m3 is not None:
         ax.plot(*ex.point, marker="*", color="C3", ms=12, zorder=5)
-        ax.annotate("P (loads)", ex.point, textcoords="offset points", xytext=(6, 6), color="C3")
+        labels.point(*ex.point, 6.0)
+        labels.add("P (loads)", ex.point, (1.0, 1.0), 6.5, color="C3")
     ax.set_aspect("equal")
     ax.margins(0.15)
     ax.set_xlabel("x1 [m]")
@@ -78,7 +118,10 @@ def plot_body(result: Result, path: Path) -> None:
     area = f"A = {body.parts[0].area:.4g} m², " if body.form == "polygon" else ""
     ax.set_title(f"{title}\n{area}m = {system.mass[0]:.6g} kg, J = {system.mass[2]:.6g} kg m² about G",
                  fontsize=9)
-    save(fig, path)
+    fig.tight_layout()
+    labels.place(fig, ax, fixed)
+    fig.savefig(path)
+    return fig
 
 
 def _line(ax, result: Result, name: str, **kw) -> None:
@@ -135,8 +178,9 @@ def plot_point(result: Result, name: str, path: Path) -> None:
 
 
 @styled
-def plot_element_loops(result: Result, path: Path) -> None:
-    """Force against deformation of each distinct element (seed Fig. 4 style)."""
+def plot_element_loops(result: Result, path: Path):
+    """Force against deformation of each distinct element (seed Fig. 4 style), the stroke
+    limits dashed with a legend. Returns the figure (saved to ``path``)."""
     system = result.system
     sample = result.plot.sample
     n = len(system.elements)
@@ -150,27 +194,41 @@ def plot_element_loops(result: Result, path: Path) -> None:
         f = sample[:, result.columns.index(f"e{k + 1}_f_N")]
         ax.plot(u * 1e3, f * 1e-3, lw=0.7)
         if el.stroke is not None:  # the stroke it can take
+            lo, hi = el.stroke
             for limit in el.stroke:
-                ax.axvline(limit * 1e3, color="C3", lw=0.9, ls="--")
+                ax.axvline(limit * 1e3, color="C3", lw=0.9, ls="--",
+                           label=f"stroke limits {plain_number(lo * 1e3)}, +{plain_number(hi * 1e3)} mm"
+                           if limit == lo else None)
+            ax.legend(fontsize=6.5, loc="best", framealpha=0.9)
         label = f"e{k + 1}" if el.count == 1 else f"e{k + 1}-e{k + el.count} (each)"
         ax.set_title(f"{label}: {el.hysteresis}, {el.angle_deg:g}°", fontsize=8)
         ax.set_xlabel("u [mm]")
         ax.set_ylabel("f [kN]")
+        # at most five labelled ticks a side: "-0.10 -0.05 0.00 0.05 0.10 0.15" runs together
+        # in a panel this narrow
+        ax.xaxis.set_major_locator(MaxNLocator(nbins=4, steps=[1, 2, 2.5, 5, 10], min_n_ticks=3))
+        ax.yaxis.set_major_locator(MaxNLocator(nbins=6, steps=[1, 2, 2.5, 5, 10]))
         k += el.count
     for ax in axes.flat[n:]:
         ax.set_visible(False)
     save(fig, path)
+    return fig
 
 
 @styled
-def plot_energy(result: Result, path: Path) -> None:
-    """Cumulative input, kinetic and hysteretic energy, and the balance error."""
+def plot_energy(result: Result, path: Path):
+    """Cumulative input, kinetic and hysteretic energy, and the balance error. Input and
+    hysteretic energy nearly coincide where little is kinetic or viscous: the input is a broad
+    light band under the others, the hysteretic energy a dashed line on it. Returns the figure
+    (saved to ``path``)."""
     fig, axes = subplots(2, 1, figsize=(8, 4.8), sharex=True, height_ratios=(3, 1))
-    _line(axes[0], result, "E_input_J", label="input", lw=1.0)
-    _line(axes[0], result, "E_hysteretic_J", label="hysteretic (dissipated + stored)", lw=1.0)
+    _line(axes[0], result, "E_input_J", label="input", lw=3.5, color="C0", alpha=0.4, zorder=2,
+          solid_capstyle="butt")
+    _line(axes[0], result, "E_hysteretic_J", label="hysteretic (dissipated + stored)", lw=1.1, color="C1",
+          ls=(0, (5, 2)), zorder=4)
     if "E_viscous_J" in result.columns:
-        _line(axes[0], result, "E_viscous_J", label="viscous", lw=1.0)
-    _line(axes[0], result, "E_kinetic_J", label="kinetic", lw=0.7)
+        _line(axes[0], result, "E_viscous_J", label="viscous", lw=1.0, color="C2", zorder=3)
+    _line(axes[0], result, "E_kinetic_J", label="kinetic", lw=0.7, color="C3", zorder=3)
     axes[0].set_ylabel("energy [J]")
     axes[0].legend(loc="upper left", fontsize=8)
     axes[0].set_title(f"Energy balance (relative error {result.energy_balance:.2e})")
@@ -178,6 +236,7 @@ def plot_energy(result: Result, path: Path) -> None:
     axes[1].set_ylabel("error [J]")
     axes[1].set_xlabel("time [s]")
     save(fig, path, TIME_MARGINS)
+    return fig
 
 
 def write_plots(result: Result, out: Path) -> list[str]:

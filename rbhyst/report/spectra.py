@@ -2,26 +2,46 @@
 
 from __future__ import annotations
 
+import textwrap
 from pathlib import Path
 
 import numpy as np
 
 from rbhyst.solve.located import CENTRE, GROUND, LocatedSpectra
-from rbhyst.report._style import save, styled, subplots
+from rbhyst.report._style import plain_log_ticks, plain_number, save, styled, subplots
 
 G_STANDARD = 9.80665
 #: one line style per damping ratio, in the deck's order
 DAMPING_STYLES = ("-", "--", ":", "-.", (0, (5, 1, 1, 1)), (0, (1, 3)))
+#: a direction whose spectra all stay below this fraction of the largest gets no panel: it is
+#: rounding (a symmetric body's cross response, 1e-15 m/s2 under a pulse of 100 m/s2)
+NEGLIGIBLE = 1e-9
+
+
+def shown_directions(spectra: LocatedSpectra) -> tuple[list[str], dict[str, float]]:
+    """The directions worth a panel, and the largest sa (m/s2) of each one left out."""
+    directions = list(dict.fromkeys(d for _, d in spectra.signals))
+    largest = {d: max(float(np.max(spectra.sa(loc, d), initial=0.0)) for loc in spectra.locations
+                      if (loc, d) in spectra.signals) for d in directions}
+    top = max(largest.values(), default=0.0)
+    if not top > 0.0:  # nothing moves at all: every panel as it is
+        return directions, {}
+    dropped = {d: v for d, v in largest.items() if v < NEGLIGIBLE * top}
+    return [d for d in directions if d not in dropped], dropped
 
 
 @styled
-def plot_spectra(spectra: LocatedSpectra, path: Path, title: str = "") -> None:
+def plot_spectra(spectra: LocatedSpectra, path: Path, title: str = ""):
     """sa against frequency, log axes, one panel per direction: the ground in black, G and
     the points in colour, one line style per damping (isolation shows as the body's curves
-    falling below the ground's above the isolation frequency)."""
+    falling below the ground's above the isolation frequency). A direction with no response
+    (below NEGLIGIBLE of the largest) is named in the title instead of drawn; beyond the
+    Nyquist frequency of a ground record, where the record has no content, the panel is
+    shaded. Returns the figure (saved to ``path``)."""
     s = spectra.spectrum
-    directions = list(dict.fromkeys(d for _, d in spectra.signals))
-    fig, axes = subplots(1, len(directions), figsize=(5.2 * len(directions), 4.4), squeeze=False)
+    directions, dropped = shown_directions(spectra)
+    width = max(5.2 * len(directions), 6.4 if dropped else 0.0)
+    fig, axes = subplots(1, len(directions), figsize=(width, 4.4), squeeze=False)
     colours = {loc: "k" if loc == GROUND else f"C{i}" for i, loc in
                enumerate(loc for loc in spectra.locations if loc != GROUND)}
     colours[GROUND] = "k"
@@ -40,14 +60,27 @@ def plot_spectra(spectra: LocatedSpectra, path: Path, title: str = "") -> None:
                         lw=1.6 if loc == GROUND else 1.1, zorder=3 if loc == GROUND else 2, label=label)
         ax.set_xscale("log")
         ax.set_yscale("log")
+        nyquist = spectra.nyquist_hz(direction)
+        if nyquist is not None and nyquist < f.max():
+            ax.axvspan(nyquist, f.max() * 10.0, color="0.5", alpha=0.12, lw=0, zorder=0,
+                       label=f"beyond the record's Nyquist frequency, {plain_number(nyquist)} Hz")
+            ax.axvline(nyquist, color="0.4", lw=0.9, ls="--", zorder=1)
+            ax.set_xlim(f.min() / 1.2, f.max() * 1.2)
+        plain_log_ticks(ax.xaxis)
+        plain_log_ticks(ax.yaxis)
         ax.set_xlabel("oscillator frequency [Hz]")
         ax.set_ylabel("sa [m/s²]")
         ax.set_title(f"along {direction}")
         ax.grid(True, which="both", alpha=0.25)
         g_axis = ax.secondary_yaxis("right", functions=(lambda a: a / G_STANDARD, lambda a: a * G_STANDARD))
         g_axis.set_ylabel("sa [g]")
+        plain_log_ticks(g_axis.yaxis)
         ax.legend(fontsize=7, loc="best")
     damping = ", ".join(f"{z:g}" for z in s.dampings)
     heading = "Response spectra (maximax absolute acceleration)" + (f": {title}" if title else "")
-    fig.suptitle(f"{heading}\ndamping {damping}", fontsize=9)
+    lines = [heading, f"damping {damping}"]
+    lines += [f"no response along {d} (sa at most {v:.2g} m/s², below {plain_number(NEGLIGIBLE)} of the largest: "
+              "rounding)" for d, v in dropped.items()]
+    fig.suptitle("\n".join(textwrap.fill(line, int(13 * width)) for line in lines), fontsize=9)
     save(fig, path)
+    return fig

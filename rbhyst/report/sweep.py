@@ -2,10 +2,13 @@
 and the peaks of a suite of motions at one level.
 
 - ``ida.png`` (two scale levels or more): the scale level against each motion's peak
-  response, one thin line per motion, the median and 84th percentile over the motions thick
-  (one colour per vary combination when there are several).
-- ``vary.png`` (a vary or cases key with two values or more): each case's peak against the
-  key's value, coloured by scale level, with the median over everything else at each value.
+  response, one thin line per motion, the median and 84th percentile over the motions thick;
+  with several vary combinations, the median of each (its 84th percentile is in stats.csv), the
+  first varied key's values told by colour, the second's by line style, the third's by marker,
+  one legend entry per value.
+- ``vary.png`` (a vary or cases key with two values or more): each case's peak displacements
+  and accelerations against the key's value (with its unit), coloured by scale level, with the
+  median over everything else at each value.
 - ``motions.png`` (one level, nothing varied): each motion's peak, with mean, median and
   84th percentile.
 """
@@ -18,32 +21,42 @@ import numpy as np
 from matplotlib.ticker import MaxNLocator
 
 from rbhyst.analyses.sweep.tables import PERCENTILE
-from rbhyst.report._style import save, styled, subplots
+from rbhyst.report._style import plain_number, save, styled, subplots
 from rbhyst.report.fragility import plot_fragility  # noqa: F401 (the sweep's plotter draws fragility.png too)
 
 PLOT_FILES = ("ida.png", "vary.png", "motions.png")
 #: the peaks drawn, where the cases have them (every peak is in cases.csv and stats.csv)
 PREFERRED = ("peak_u1_m", "peak_u2_m", "peak_theta3_rad", "peak_at1_m_s2", "peak_at2_m_s2")
-MAX_GROUPS = 8  # vary combinations drawn in ida.png
+#: those of vary.png: displacements and accelerations
+VARY_PEAKS = ("peak_u1_m", "peak_u2_m", "peak_at1_m_s2", "peak_at2_m_s2")
 MAX_KEYS = 4  # vary keys drawn in vary.png
+#: how ida.png tells the varied keys' values apart: the first key by colour, the second by
+#: line style, the third by marker (more keys or values: one colour per combination)
+COLOURS = tuple(f"C{i}" for i in range(10))
+STYLES = ("-", "--", ":", "-.")
+MARKERS = ("o", "s", "^", "D", "v", "P")
 
 
-def write_plots(header: list[str], rows: list[list], vary_keys: list[str], scale_kind: str, folder: Path) -> list[str]:
-    """The plots that fit the sweep's axes, into ``folder``; returns their names."""
+def write_plots(header: list[str], rows: list[list], vary_keys: list[str], scale_kind: str, folder: Path,
+                units: dict[str, str | None] | None = None) -> list[str]:
+    """The plots that fit the sweep's axes, into ``folder``; returns their names. ``units``:
+    the unit of each vary key (rbhyst.deck.key_unit), for the axes and legends."""
     cases = _records(header, rows, vary_keys)
     ok = [c for c in cases if c["status"] == "ok"]
     quantities = _quantities(header, ok)
     if not ok or not quantities:
         return []
+    units = units or {}
     written = []
     levels = sorted({c["scale"] for c in cases})
     varied = [k for k in vary_keys if len({c["vary"][k] for c in cases}) > 1]
     scale_label = "target PGA [g]" if scale_kind == "pga_g" else "scale factor"
     if len(levels) > 1:
-        plot_ida(ok, quantities, varied, scale_label, Path(folder) / "ida.png")
+        plot_ida(ok, quantities, varied, scale_label, Path(folder) / "ida.png", units)
         written.append("ida.png")
     if varied:
-        plot_vary(ok, quantities[:3], varied[:MAX_KEYS], scale_label, Path(folder) / "vary.png")
+        shown = [q for q in VARY_PEAKS if q in quantities] or quantities[:4]
+        plot_vary(ok, shown, varied[:MAX_KEYS], scale_label, Path(folder) / "vary.png", units)
         written.append("vary.png")
     if len(levels) == 1 and not varied:
         plot_motions(ok, quantities, Path(folder) / "motions.png")
@@ -100,40 +113,124 @@ def _groups(cases, vary_keys) -> dict[tuple, list[dict]]:
     return out
 
 
+def key_label(key: str, units: dict[str, str | None]) -> str:
+    """A vary key with its unit: ``body.mass [kg]``; a pure number or an unknown unit bare."""
+    unit = units.get(key)
+    return f"{key} [{unit}]" if unit else key
+
+
+def _value(v: str) -> str:
+    """A vary value as a label shows it: numbers shortest (200000.0 -> 200000), text as it is."""
+    try:
+        return plain_number(float(v))
+    except ValueError:
+        return v
+
+
+def _ordered(values) -> list[str]:
+    """Distinct values, numbers in ascending order, anything else as it comes."""
+    distinct = list(dict.fromkeys(values))
+    try:
+        return sorted(distinct, key=float)
+    except ValueError:
+        return distinct
+
+
+def _encoding(idents: list[tuple], vary_keys: list[str]):
+    """How each combination is drawn: {ident: (colour, line style, marker)}, and the legend's
+    (label, style) entries. Keys map to colour, line style and marker in turn while their
+    values fit those; otherwise every combination gets a colour of a sequential map."""
+    values = [_ordered(i[k] for i in idents) for k in range(len(vary_keys))]
+    channels = (COLOURS, STYLES, MARKERS)
+    if len(vary_keys) <= len(channels) and all(len(v) <= len(c) for v, c in zip(values, channels)):
+        look = {}
+        for ident in idents:
+            pick = [channels[k][values[k].index(ident[k])] for k in range(len(vary_keys))]
+            pick += [None] * (3 - len(pick))
+            look[ident] = (pick[0], pick[1] or "-", pick[2])
+        return look, values
+    from matplotlib import colormaps
+
+    cmap = colormaps["viridis"]
+    n = max(1, len(idents) - 1)
+    return {ident: (cmap(0.9 * i / n), "-", None) for i, ident in enumerate(idents)}, None
+
+
 @styled
-def plot_ida(ok, quantities, vary_keys, scale_label, path: Path) -> None:
+def plot_ida(ok, quantities, vary_keys, scale_label, path: Path, units: dict | None = None):
+    """Returns the figure (saved to ``path``)."""
+    units = units or {}
     groups = _groups(ok, vary_keys)
-    shown = list(groups.items())[:MAX_GROUPS]
     several = len(groups) > 1
+    idents = sorted(groups, key=lambda ident: [(_num(v), v) for v in ident])
+    look, values = _encoding(idents, vary_keys) if several else ({(): ("k", "-", None)}, None)
     fig, axes = _grid(len(quantities), legend=True)
     for ax, q in zip(axes, quantities):
-        for g, (ident, members) in enumerate(shown):
-            colour = f"C{g}" if several else "k"
-            by_motion: dict[str, list[tuple[float, float]]] = {}
-            for c in members:
-                if q in c["peaks"]:
-                    by_motion.setdefault(c["motion"], []).append((c["scale"], c["peaks"][q]))
-            for m, pts in by_motion.items():
-                pts.sort()
-                ax.plot([p for _, p in pts], [s for s, _ in pts], "-o", ms=2.5, lw=0.8,
-                        color=colour if several else "0.65", alpha=0.35 if several else 1.0)
+        for ident in idents:
+            members = groups[ident]
+            colour, style, marker = look[ident]
+            if not several:  # one line per motion; with several combinations they would be a tangle
+                by_motion: dict[str, list[tuple[float, float]]] = {}
+                for c in members:
+                    if q in c["peaks"]:
+                        by_motion.setdefault(c["motion"], []).append((c["scale"], c["peaks"][q]))
+                for m, pts in by_motion.items():
+                    pts.sort()
+                    ax.plot([p for _, p in pts], [s for s, _ in pts], "-o", ms=2.5, lw=0.8, color="0.65")
             levels = sorted({c["scale"] for c in members})
             med, p84 = [], []
             for s in levels:
                 x = np.array([c["peaks"][q] for c in members if c["scale"] == s and q in c["peaks"]])
                 med.append(np.median(x) if len(x) else np.nan)
                 p84.append(np.percentile(x, PERCENTILE) if len(x) else np.nan)
-            name = ", ".join(f"{k} = {v}" for k, v in zip(vary_keys, ident)) if several else ""
-            ax.plot(med, levels, "-", lw=2.2, color=colour, label=f"median {name}".strip())
-            ax.plot(p84, levels, "--", lw=2.0, color=colour, label=f"84th percentile {name}".strip())
+            ax.plot(med, levels, ls=style, lw=2.0, color=colour, marker=marker, ms=4)
+            if not several:
+                ax.plot(p84, levels, "--", lw=2.0, color=colour)
         ax.set_xlabel(_label(q))
         ax.set_ylabel(scale_label)
-    axes[0].plot([], [], "-o", ms=2.5, lw=0.8, color="0.65", label="each motion")
-    _legend_cell(axes, len(quantities))
+    cell = axes[len(quantities)]
+    cell.legend(*_ida_legend(vary_keys, units, idents, look, values), loc="center", fontsize=7, frameon=False)
     motions = len({c["motion"] for c in ok})
-    more = f" (first {MAX_GROUPS} of {len(groups)} vary combinations)" if len(groups) > MAX_GROUPS else ""
-    fig.suptitle(f"Incremental dynamic analysis: {motions} motion{'s' * (motions != 1)}{more}")
+    heading = f"Incremental dynamic analysis: {motions} motion{'s' * (motions != 1)}"
+    if several:
+        heading += (f"; the median over the motions of each of {len(groups)} combinations "
+                    f"(84th percentiles in stats.csv)")
+    fig.suptitle(heading)
     save(fig, path)
+    return fig
+
+
+def _num(v: str) -> float:
+    try:
+        return float(v)
+    except ValueError:
+        return float("inf")
+
+
+def _ida_legend(vary_keys, units, idents, look, values):
+    """Handles and labels: the lines of one combination, or each key's values under its name."""
+    from matplotlib.lines import Line2D
+
+    def entry(label, **kw):
+        return Line2D([], [], **kw), label
+
+    if len(idents) == 1:
+        rows = [entry("each motion", color="0.65", marker="o", ms=2.5, lw=0.8),
+                entry("median over the motions", color="k", lw=2.0),
+                entry("84th percentile", color="k", lw=2.0, ls="--")]
+    elif values is None:  # one colour per combination
+        rows = [entry(", ".join(key_label(k, units) for k in vary_keys), ls="none")]
+        rows += [entry(", ".join(_value(v) for v in ident), color=look[ident][0], lw=2.0) for ident in idents]
+    else:
+        rows = []
+        for k, key in enumerate(vary_keys):
+            rows.append(entry(f"{key_label(key, units)}:", ls="none"))
+            for i, v in enumerate(values[k]):
+                kw = ({"color": COLOURS[i]} if k == 0 else {"color": "0.3", "ls": STYLES[i]} if k == 1 else
+                      {"color": "0.3", "ls": "none", "marker": MARKERS[i], "ms": 4})
+                rows.append(entry(f"  {_value(v)}", lw=2.0, **kw))
+        rows.append(entry("(median over the motions)", ls="none"))
+    return [h for h, _ in rows], [label for _, label in rows]
 
 
 def _positions(values: list[str]) -> tuple[dict[str, float], list[str] | None]:
@@ -146,7 +243,9 @@ def _positions(values: list[str]) -> tuple[dict[str, float], list[str] | None]:
 
 
 @styled
-def plot_vary(ok, quantities, keys, scale_label, path: Path) -> None:
+def plot_vary(ok, quantities, keys, scale_label, path: Path, units: dict | None = None):
+    """Returns the figure (saved to ``path``)."""
+    units = units or {}
     levels = sorted({c["scale"] for c in ok})
     fig, axes = subplots(len(keys), len(quantities), figsize=(4.2 * len(quantities), 3.3 * len(keys)),
                              squeeze=False)
@@ -169,11 +268,16 @@ def plot_vary(ok, quantities, keys, scale_label, path: Path) -> None:
                         label=f"{scale_label} {s:g}: median")
             if ticks is not None:
                 ax.set_xticks(range(len(ticks)), ticks, rotation=20, fontsize=7)
-            ax.set_xlabel(key)
+            elif len(set(pos.values())) <= 8:  # at the values themselves, as the sweep gives them
+                at = sorted(set(pos.values()))
+                ax.set_xticks(at, [plain_number(v) for v in at], fontsize=7,
+                              rotation=20 if max(len(plain_number(v)) for v in at) > 5 else 0)
+            ax.set_xlabel(key_label(key, units))
             ax.set_ylabel(_label(q))
     axes[0, 0].legend(fontsize=6.5)
     fig.suptitle("Peak response against the varied values (points: every case; lines: median over the rest)")
     save(fig, path)
+    return fig
 
 
 @styled

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from rbhyst.report._style import save, styled, subplots
+from rbhyst.report._style import plain_log_ticks, save, styled, subplots
 
 G_STANDARD = 9.80665
 #: a cross response below this is not drawn (a symmetric body's is rounding: 1e-17)
@@ -14,8 +14,9 @@ SHOWN_ABOVE = 1e-6
 
 
 @styled
-def plot_transmissibility(result, path: Path, title: str = "") -> None:
-    """log-log T; along the excitation solid, across it dashed; T = 1 marked."""
+def plot_transmissibility(result, path: Path, title: str = ""):
+    """log-log T with plain tick labels; along the excitation solid, across it dashed; T = 1
+    marked. Returns the figure (saved to ``path``)."""
     table = result.table()
     locations = list(dict.fromkeys(c[2:-3] for c in result.columns))
     amplitudes = list(dict.fromkeys(table[:, 1]))
@@ -41,6 +42,8 @@ def plot_transmissibility(result, path: Path, title: str = "") -> None:
                     fontsize=7, color="0.3")
         ax.set_xscale("log")
         ax.set_yscale("log")
+        plain_log_ticks(ax.xaxis)
+        plain_log_ticks(ax.yaxis)
         ax.set_xlabel("frequency [Hz]")
         ax.set_ylabel("T = peak |at| / amplitude")
         ax.set_title("G (mass centre)" if loc == "G" else f"point {loc}")
@@ -48,6 +51,7 @@ def plot_transmissibility(result, path: Path, title: str = "") -> None:
         ax.legend(fontsize=7, loc="best")
     for ax in axes.flat[len(locations):]:
         ax.set_visible(False)
-    heading = f"Transmissibility, stepped sine along {result.direction}" + (f": {title}" if title else "")
+    heading = f"Transmissibility, stepped sine along {result.direction}" + (f"\n{title}" if title else "")
     fig.suptitle(heading, fontsize=9)
     save(fig, path)
+    return fig

@@ -28,10 +28,12 @@ FINE_POINTS = 400
 
 def ground_spectra(excitation, t_end: float, dampings, periods) -> LocatedSpectra:
     """Spectra of every support acceleration of ``excitation`` over [0, t_end] (those it has, x1 then x2)."""
-    labels, parts = [], []
+    labels, parts, record_dt = [], [], []
     for k, signal in ((1, excitation.ag1), (2, excitation.ag2)):
         if signal is None:
             continue
+        if isinstance(signal, Series):
+            record_dt.append((f"x{k}", float(signal.dt)))
         acc = SpectrumAccumulator(periods, dampings, 1, dt=_nominal_step(signal))
         for h, values, jump in signal_chunks(signal, t_end, max(periods)):
             if jump is not None:
@@ -51,7 +53,7 @@ def ground_spectra(excitation, t_end: float, dampings, periods) -> LocatedSpectr
     spectrum = type(first)(periods=first.periods, dampings=first.dampings, dt=first.dt, samples=first.samples,
                            sd=np.concatenate([p.sd for p in parts], axis=2),
                            sa=np.concatenate([p.sa for p in parts], axis=2))
-    return LocatedSpectra(tuple(labels), spectrum)
+    return LocatedSpectra(tuple(labels), spectrum, tuple(record_dt))
 
 
 def _nominal_step(signal) -> float:

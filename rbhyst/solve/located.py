@@ -24,10 +24,13 @@ GROUND, CENTRE = "ground", "G"
 
 @dataclass(frozen=True)
 class LocatedSpectra:
-    """``spectrum`` has one signal per entry of ``signals``, (location, direction) each."""
+    """``spectrum`` has one signal per entry of ``signals``, (location, direction) each;
+    ``record_dt`` the sample step of each ground motion that is a record, (direction, s): its
+    content ends at the Nyquist frequency 1 / (2 dt), whatever the oscillators' range."""
 
     signals: tuple[tuple[str, str], ...]
     spectrum: Spectrum
+    record_dt: tuple[tuple[str, float], ...] = ()
 
     @property
     def locations(self) -> list[str]:
@@ -49,7 +52,15 @@ class LocatedSpectra:
         a, b = self.spectrum, other.spectrum
         spectrum = Spectrum(periods=b.periods, dampings=b.dampings, dt=b.dt, samples=b.samples,
                             sd=np.concatenate([a.sd, b.sd], axis=2), sa=np.concatenate([a.sa, b.sa], axis=2))
-        return LocatedSpectra(self.signals + other.signals, spectrum)
+        return LocatedSpectra(self.signals + other.signals, spectrum, self.record_dt + other.record_dt)
+
+    def nyquist_hz(self, direction: str | None = None) -> float | None:
+        """The Nyquist frequency of the ground record along ``direction`` (without, or without
+        a record there: the lowest of every record's); None without a record."""
+        steps = dict(self.record_dt)
+        if direction in steps:
+            return 0.5 / steps[direction]
+        return 0.5 / max(steps.values()) if steps else None
 
     def table(self) -> tuple[list[tuple[str, str]], np.ndarray]:
         """The rows of spectra.csv: (location, direction) of each and its numbers (damping,

@@ -309,11 +309,25 @@ def _write_files(outcome: Outcome, journal: Journal, save_histories: bool, plott
                      if c.key in outcome.results and outcome.results[c.key].get("history")}
             assemble(tmp / HISTORIES_FILE, sweep.cases, parts)
         if plotter is not None:
-            plotter.write_plots(header, rows, sweep.vary_keys, sweep.scale_kind, tmp)
+            plotter.write_plots(header, rows, sweep.vary_keys, sweep.scale_kind, tmp, _vary_units(sweep))
         if sweep.fragility is not None:
             from rbhyst.analyses.fragility import write_fragility
 
             write_fragility(sweep.fragility, header, rows, tmp, plotter)
+
+
+def _vary_units(sweep) -> dict[str, str | None]:
+    """The unit of each vary key, from the first case's deck (a signal's amplitude takes the
+    units of its motion)."""
+    from rbhyst.model.deck import key_unit
+
+    data = sweep.base.data
+    if sweep.cases:
+        try:
+            data = sweep.base.deck().with_values(sweep.cases[0].values).model_dump(mode="python")
+        except InputError:
+            pass
+    return {k: key_unit(k, data) for k in sweep.vary_keys}
 
 
 def _about(outcome: Outcome) -> dict:

@@ -13,7 +13,7 @@ from typing import Callable
 
 import numpy as np
 
-from rbhyst.model.deck import INTEGRATORS
+from rbhyst.model.integrators import INTEGRATORS
 
 N_COEF = 7  # coefficient matrices per substep level
 

@@ -1,0 +1,81 @@
+"""What `rbhyst run` prints about its elements: one aligned row per [[elements]] entry (identical
+elements in parallel, `count`, share one), from summary.json's numbers. Plain text, no matplotlib."""
+
+from __future__ import annotations
+
+#: every entry up to this many; beyond, the most loaded SHOWN and a line for the rest
+ALL_UP_TO = 12
+SHOWN = 8
+
+
+def element_table(summary: dict, all_up_to: int = ALL_UP_TO, shown: int = SHOWN) -> list[str]:
+    """The lines of the elements' table for ``summary`` (Result.summary(), summary.json): peak
+    |force|, the peak deformation (signed; with a stroke, that on the side it used most) and
+    how much of the stroke it used."""
+    entries = summary.get("elements") or []
+    if not entries:
+        return []
+    peaks, extremes = summary["peaks"], summary["extremes"]
+    rows, k = [], 1
+    for el in entries:
+        n = el["count"]
+        u = extremes[f"e{k}_u_m"]
+        stroke = el.get("stroke")
+        rows.append({
+            "label": f"e{k}" if n == 1 else f"e{k}-e{k + n - 1} (each)",
+            "set": el["hysteresis"],
+            "angle": el["angle_deg"],
+            "f": peaks[f"e{k}_f_N"],
+            "u": stroke["peak_deformation_m"] if stroke else (u["max"] if abs(u["max"]) >= abs(u["min"]) else u["min"]),
+            "limits": stroke["limits_m"] if stroke else None,
+            "used": stroke["utilization"] if stroke else None,
+        })
+        k += n
+    heading = "elements (peaks over the run):"
+    if len(rows) > all_up_to:
+        rows = sorted(rows, key=lambda r: (-1.0 if r["used"] is None else r["used"], r["f"]), reverse=True)
+        more = len(rows) - shown
+        rows = rows[:shown]
+        how = "stroke used, then peak force" if any(r["used"] is not None for r in rows) else "peak force"
+        heading = f"elements: the {shown} most loaded of {shown + more} ({how}):"
+    else:
+        more = 0
+    kn = max(r["f"] for r in rows) >= 1e3
+    strokes = any(r["limits"] is not None for r in rows)
+    header = ["element", "set", "angle [deg]", f"peak |f| [{'kN' if kn else 'N'}]", "peak u [mm]"]
+    if strokes:
+        header += ["stroke [mm]", "used"]
+    table = [header]
+    for r in rows:
+        cells = [r["label"], r["set"], f"{r['angle']:g}", f"{r['f'] * (1e-3 if kn else 1.0):.4g}",
+                 f"{r['u'] * 1e3:+.4g}"]
+        if strokes:
+            if r["limits"] is None:
+                cells += ["-", "-"]
+            else:
+                lo, hi = r["limits"]
+                cells += [f"{lo * 1e3:g}, +{hi * 1e3:g}", _percent(r["used"])]
+        table.append(cells)
+    left = {0, 1}  # names to the left, numbers to the right
+    if strokes and any(r["used"] is not None and r["used"] > 1.0 for r in rows):
+        # "152% over": the percentages aligned on their right, the word after them
+        used = len(header) - 1
+        width = max(len(row[used].removesuffix(" over")) for row in table[1:])
+        for row in table[1:]:
+            number = row[used].removesuffix(" over")
+            row[used] = number.rjust(width) + row[used][len(number):]
+        table[0][used] = table[0][used].rjust(width)
+        left.add(used)
+    widths = [max(len(row[i]) for row in table) for i in range(len(header))]
+    lines = [heading]
+    for row in table:
+        lines.append("  " + "  ".join(c.ljust(w) if i in left else c.rjust(w)
+                                      for i, (c, w) in enumerate(zip(row, widths))).rstrip())
+    if more:
+        lines.append(f"  ... and {more} more (every element in summary.json)")
+    return lines
+
+
+def _percent(used: float) -> str:
+    text = f"{100 * used:.0f}%" if used >= 0.1 else f"{100 * used:#.2g}%"
+    return text + " over" if used > 1.0 else text
