@@ -70,6 +70,7 @@ footer { margin-top: 40px; color: var(--muted); font-size: 12px; border-top: 1px
   section.page { break-before: page; page-break-before: always; }
   figure { break-inside: avoid; page-break-inside: avoid; }
   figure img { max-height: 235mm; width: auto; max-width: 100%; border: none; }
+  figure.model img { max-height: 120mm; }  /* the model's tables share its page */
   table { break-inside: auto; font-size: 8.5pt; }
   div.wide { overflow: visible; }
   tr, .glance div, ul.warnings li { break-inside: avoid; page-break-inside: avoid; }
@@ -118,7 +119,8 @@ def table(header: list[str], rows: list[list[str]], numeric: set[int] = frozense
 def figure(folder: Path, name: str, caption: str = "") -> str:
     data = base64.b64encode((folder / name).read_bytes()).decode("ascii")
     cap = esc(caption or name)
-    return (f'<figure><img alt="{esc(name)}" data-file="{esc(name)}" src="data:image/png;base64,{data}">'
+    cls = f' class="{name[:-4]}"' if name == "model.png" else ""
+    return (f'<figure{cls}><img alt="{esc(name)}" data-file="{esc(name)}" src="data:image/png;base64,{data}">'
             f"<figcaption>{cap}</figcaption></figure>")
 
 
