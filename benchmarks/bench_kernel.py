@@ -47,13 +47,13 @@ def main() -> None:
     ne = system.bvec.shape[0]
     # like the C loop: the whole run as one chunk into the same output buffers every repeat
     t_grid = settings.dt * np.arange(n + 1)
-    load = np.ascontiguousarray(system.excitation.load(t_grid, system.mass))
+    load = np.ascontiguousarray(system.excitation.load_nodes(t_grid, settings.dt, system.mass))
     buf = _Buffers(n, ne)
     times = []
     for _ in range(args.repeat):
         x, st = plan._state()
         t0 = time.perf_counter()
-        plan._call(load, 0.0, 1, n, x, st, buf)
+        plan._call(load, 0.0, 1, settings.dt, 1, n, x, st, buf)
         times.append(time.perf_counter() - t0)
     t_numba = min(times)
     d_numba = buf.d.copy()

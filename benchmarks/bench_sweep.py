@@ -83,8 +83,8 @@ def main() -> None:
             return
         from distributed import LocalCluster
 
-        with LocalCluster(n_workers=args.workers, threads_per_worker=1, processes=True,
-                          dashboard_address=None) as cluster:
+        with LocalCluster(n_workers=args.workers, threads_per_worker=1, processes=True, host="127.0.0.1",
+                          dashboard_address=None) as cluster:  # this machine only
             for n in sizes:
                 show(bench(n, folder, scheduler=cluster.scheduler_address))
 

@@ -372,7 +372,7 @@ def sweep(
     workers: Annotated[Optional[int], typer.Option(
         "--workers", help="Local worker processes (default: the cores).")] = None,
     scheduler: Annotated[Optional[str], typer.Option(
-        "--scheduler", help="Run on this Dask scheduler instead, e.g. tcp://host:8786.")] = None,
+        "--scheduler", help="Run on this Dask scheduler instead, e.g. tcp://host:8786 (tls:// with --tls-*).")] = None,
     out: Annotated[Optional[Path], typer.Option(
         "--out", help="Output folder (default: results/<sweep stem>/ beside the sweep file).")] = None,
     fresh: Annotated[bool, typer.Option("--fresh", help="Start over: forget the cases the folder holds.")] = False,
@@ -380,6 +380,12 @@ def sweep(
         "--save-histories", help="Every case's time history into histories.parquet (needs pyarrow).")] = False,
     plots: Annotated[bool, typer.Option("--plots/--no-plots", help="Write PNG plots.")] = True,
     report: Annotated[bool, typer.Option("--report", help="Also write report.html (see `rbhyst report`).")] = False,
+    tls_ca_file: Annotated[Optional[Path], typer.Option(
+        "--tls-ca-file", help="With a tls:// --scheduler: the CA certificate (PEM) the scheduler's is signed by.")] = None,
+    tls_cert: Annotated[Optional[Path], typer.Option(
+        "--tls-cert", help="With a tls:// --scheduler: this client's certificate (PEM).")] = None,
+    tls_key: Annotated[Optional[Path], typer.Option(
+        "--tls-key", help="With a tls:// --scheduler: this client's private key (PEM), if not in --tls-cert.")] = None,
 ):
     """One deck over motions x scale x deck values: cases.csv, stats.csv, sweep.json, plots.
 
@@ -404,8 +410,11 @@ def sweep(
         from rbhyst.solve.kernels.compiled import ahead_of_time
         from rbhyst.solve.kernels.loop import run_chunk
 
+        on_dask = scheduler is not None or (workers is None and getattr(sw.cluster, "scheduler", None) is not None)
+        if on_dask:
+            _quiet_dask()
         # built at install, the kernels need no compiling (and numba's cache stays empty)
-        if scheduler is None and not ahead_of_time() and not kernels.cached([run_chunk]):
+        if not on_dask and not ahead_of_time() and not kernels.cached([run_chunk]):
             say("note: compiling the numba kernels, once (a minute at most); the workers load them from the cache")
             from rbhyst.api import run as _run
 
@@ -440,7 +449,7 @@ def sweep(
             try:
                 outcome = run_sweep(sw, out=target, workers=workers, scheduler=scheduler, fresh=fresh,
                                     save_histories=save_histories, plots=plots, progress=progress,
-                                    started=started)
+                                    started=started, tls_ca_file=tls_ca_file, tls_cert=tls_cert, tls_key=tls_key)
             except SweepIncomplete as err:
                 say(f"error: {err}")
                 raise typer.Exit(EXIT_ANALYSIS) from None
@@ -469,6 +478,26 @@ def sweep(
         if len(bad) > 5:
             say(f"warning: ... and {len(bad) - 5} more failed cases: see cases.csv (status, message)")
     say(f"wrote {target}")
+    if outcome.killed:
+        n = len(outcome.killed)
+        say(f"error: the sweep is incomplete: case{'s' * (n != 1)} {', '.join(map(str, outcome.killed))} killed "
+            f"{'their' if n != 1 else 'its'} worker process every time (failed in cases.csv, not kept): the same "
+            "command tries them again, with more memory per worker if that was the cause")
+        raise typer.Exit(EXIT_ANALYSIS)
+
+
+def _quiet_dask() -> None:
+    """Dask's own log lines off the console: the command says in its own lines what went wrong
+    (the workers keep their logs)."""
+    import logging
+
+    try:
+        import distributed  # noqa: F401  (it sets up its loggers when imported)
+    except ImportError:
+        return
+    for name in ("distributed", "tornado", "bokeh"):
+        for handler in logging.getLogger(name).handlers:
+            handler.setLevel(logging.CRITICAL + 1)
 
 
 @app.command(cls=Command)
@@ -643,6 +672,127 @@ def make_record(
 
 #: the first line of every record make-record writes (the readers skip '#' comments)
 RECORD_MARK = "# rbhyst make-record"
+
+
+@app.command("make-motion", cls=Command)
+def make_motion(
+    out: Annotated[Path, typer.Argument(help="Folder to write: m1_x1.csv, m1_x2.csv, ..., trs.csv, trs.png, "
+                                             "motions.json.")],
+    rrs: Annotated[Optional[str], typer.Option(help="ac156, or a CSV RRS for x1 (frequency_hz and a value column "
+                                                    "with its unit: sa_g, sa_m_s2).")] = None,
+    rrs_x2: Annotated[Optional[str], typer.Option("--rrs-x2", help="A CSV RRS for x2 (vertical), with an RRS "
+                                                                   "file for x1.")] = None,
+    rrs_damping: Annotated[Optional[float], typer.Option(help="The damping ratio the RRS files are drawn for.")] = None,
+    sds: Annotated[Optional[float], typer.Option(help="AC156: S_DS, in g.")] = None,
+    z_over_h: Annotated[Optional[float], typer.Option(help="AC156: z/h, 0 at grade to 1 at the roof.")] = None,
+    duration: Annotated[float, typer.Option(help="Length in s (AC156: 30 s, 20 s of them strong motion).")] = 30.0,
+    dt: Annotated[float, typer.Option(help="Sampling step in s.")] = 0.005,
+    seed: Annotated[int, typer.Option(help="Random seed: the same seed gives the same motions.")] = 1,
+    motions: Annotated[int, typer.Option(min=1, help="Number of motions (each with its own noise).")] = 1,
+    plots: Annotated[bool, typer.Option("--plots/--no-plots", help="Write trs.png.")] = True,
+):
+    """Spectrum-compatible support motions: one record per axis whose TRS lies within 0.9-1.3 of the RRS.
+
+    The records are read by decks and by `rbhyst spectrum` (--units g); exit 3 when a motion
+    cannot be matched, with what would work.
+    """
+    import json
+    import shlex
+
+    from rbhyst.analyses.qualification import matching
+    from rbhyst.analyses.qualification.rrs import requested_rrs
+    from rbhyst.files.outdir import staged_directory
+
+    keys = {"rrs": "--rrs", "rrs_x2": "--rrs-x2", "damping": "--rrs-damping", "sds": "--sds", "z_over_h": "--z-over-h",
+            "duration": "--duration", "dt": "--dt"}
+    with user_errors():
+        spectra, standard = requested_rrs(rrs, rrs_x2, rrs_damping, sds, z_over_h, Path.cwd(), keys)
+        problems = matching.motion_problems(spectra, duration, dt, None, standard, keys)
+        if problems:
+            raise InputError(problems)
+        made = matching.make_motions(spectra, motions, duration, dt, seed)
+        options = {"--rrs": rrs, "--rrs-x2": rrs_x2, "--rrs-damping": rrs_damping, "--sds": sds,
+                   "--z-over-h": z_over_h, "--duration": duration, "--dt": dt, "--seed": seed}
+        mark = f"{MOTION_MARK} " + " ".join(f"{k} {shlex.quote(str(v))}" for k, v in options.items() if v is not None)
+        with staged_directory(out) as tmp:
+            for m in made:
+                for axis in m.records:
+                    (tmp / matching.record_name(m, axis)).write_text(matching.record_text(m, axis, mark),
+                                                                    encoding="utf-8")
+            (tmp / "trs.csv").write_text("\n".join(matching.trs_rows(made)) + "\n", encoding="utf-8")
+            (tmp / "motions.json").write_text(json.dumps(matching.motions_summary(made, spectra, standard), indent=2)
+                                              + "\n", encoding="utf-8")
+            if plots:
+                from rbhyst.report.qualification import plot_trs
+
+                plot_trs(made, spectra, tmp / "trs.png")
+    for m in made:
+        for axis, r in m.records.items():
+            say(f"motion {m.number} {axis}: TRS from {r.check.said()} at {len(r.check.frequency_hz)} frequencies "
+                f"({r.iterations} iterations); peak {float(abs(r.acc_g).max()):.3g} g")
+        if m.correlation is not None:
+            say(f"motion {m.number}: correlation of x1 and x2 {m.correlation:+.3f}")
+    say(f"wrote {out}")
+
+
+#: the first line of every record make-motion writes
+MOTION_MARK = "# rbhyst make-motion"
+
+
+@app.command(cls=Command)
+def qualify(
+    deck: Annotated[Path, typer.Argument(help="TOML or YAML deck (x1 horizontal, x2 vertical), with a qualify "
+                                              "section or the options below.")],
+    standard: Annotated[Optional[str], typer.Option(help="The required response spectrum: ac156.")] = None,
+    sds: Annotated[Optional[float], typer.Option(help="AC156: S_DS, in g.")] = None,
+    z_over_h: Annotated[Optional[float], typer.Option(help="AC156: z/h, 0 at grade to 1 at the roof.")] = None,
+    rrs: Annotated[Optional[str], typer.Option(help="A CSV RRS for x1 instead of a standard.")] = None,
+    rrs_x2: Annotated[Optional[str], typer.Option("--rrs-x2", help="A CSV RRS for x2.")] = None,
+    rrs_damping: Annotated[Optional[float], typer.Option(help="The damping ratio the RRS files are drawn for.")] = None,
+    motions: Annotated[Optional[str], typer.Option(help="How many motions to make, or 'deck' (its own "
+                                                        "excitation.support).")] = None,
+    seed: Annotated[Optional[int], typer.Option(help="Random seed of the motions.")] = None,
+    duration: Annotated[Optional[float], typer.Option(help="Length of each motion in s (AC156: 30).")] = None,
+    motion_dt: Annotated[Optional[float], typer.Option(help="Sample step of the motions in s.")] = None,
+    integrator: Annotated[Optional[str], typer.Option(help="Override analysis.integrator.")] = None,
+    dt: Annotated[Optional[float], typer.Option(help="Override analysis.dt, in s.")] = None,
+    tolerance: Annotated[Optional[float], typer.Option(help="The accuracy asked for (see rbhyst run).")] = None,
+    out: Annotated[Optional[Path], typer.Option(
+        "--out", help="Output folder (default: the deck's output folder + '-qualify').")] = None,
+    plots: Annotated[bool, typer.Option("--plots/--no-plots", help="Write qualification.png.")] = True,
+):
+    """The verdict of a deck against a required response spectrum: qualification.json and .png.
+
+    Exit 0: it qualifies; 1: it does not (each failed criterion said); 2: a mistake in the
+    deck or options; 3: motions that cannot be matched, or a run that fails.
+    """
+    from rbhyst.analyses.qualification.verdict import output_files, qualify as judge, request, verdict_lines
+    from rbhyst.files.outdir import check_free, staged_directory
+    from rbhyst.model.deck import ANALYSIS_SECTIONS, load_deck
+
+    with user_errors():
+        d = load_deck(deck, need=ANALYSIS_SECTIONS)
+        req = request(d, {"standard": standard, "sds": sds, "z_over_h": z_over_h, "rrs": rrs, "rrs_x2": rrs_x2,
+                          "rrs_damping": rrs_damping, "motions": motions, "seed": seed, "duration": duration,
+                          "motion_dt": motion_dt})
+        target = out if out is not None else _sibling_dir(d, deck, "-qualify")
+        check_free(target, output_files(req) + (["qualification.png"] if plots and d.output.plots else []))
+        with staged_directory(target) as tmp:
+            v = judge(d, req, tmp, integrator=integrator, dt=dt, tolerance=tolerance, say=say)
+            if plots and d.output.plots:
+                from rbhyst.report.qualification import plot_verdict
+
+                plot_verdict(v.checks, req.rrs, v.criteria, v.passed, tmp / "qualification.png",
+                             title=d.title or "", notes=v.heading)
+    for line in verdict_lines(v):
+        say(line)
+    say(f"wrote {target}")
+    if not v.passed:
+        raise typer.Exit(EXIT_VERDICT)
+
+
+#: ``rbhyst qualify``: the deck does not qualify
+EXIT_VERDICT = 1
 
 
 def output_dir(deck, deck_path: Path) -> Path:

@@ -110,3 +110,19 @@ def test_writing_plots_leaves_the_callers_matplotlib_as_it_was(tmp_path):
     subprocess.run([sys.executable, "-c", code, str(DECKS / "machine_on_mounts.toml"), str(tmp_path / "out")],
                    check=True)
     assert (tmp_path / "out" / "model.png").exists()
+
+
+def test_a_run_into_a_folder_loads_only_what_its_scene_needs(tmp_path):
+    """Without spectra or plots, writing a run's files imports no spectra kernels, no scipy, no
+    matplotlib (each costs a command tens of milliseconds and more memory); numba's JIT, where
+    the kernels were not built at install, brings scipy with it."""
+    import subprocess
+    import sys
+
+    code = ("import sys, rbhyst; rbhyst.run(sys.argv[1], out=sys.argv[2], plots=False); "
+            "jit = 'numba' in sys.modules; "
+            "print(sorted(m for m in ('rbhyst.solve.spectra', 'scipy', 'matplotlib', 'pandas') "
+            "if m in sys.modules and not (jit and m == 'scipy')))")
+    done = subprocess.run([sys.executable, "-c", code, str(DECKS / "machine_on_mounts.toml"), str(tmp_path / "o")],
+                          capture_output=True, text=True, check=True)
+    assert done.stdout.split("\n")[-2] == "[]", done.stdout + done.stderr

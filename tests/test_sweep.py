@@ -505,11 +505,376 @@ def test_dask_cluster_gives_the_local_results(project):
     distributed = pytest.importorskip("distributed")
     sweep = write_sweep(project, basic(duration=1.0))
     assert invoke("sweep", sweep, "--no-plots", "--workers", "2", "--out", project / "local")[0] == 0
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None) \
-            as cluster:
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
+                                  dashboard_address=None) as cluster:
         code, err = invoke("sweep", sweep, "--no-plots", "--scheduler", cluster.scheduler_address,
                            "--out", project / "dask")
     assert code == 0, err
     assert f"computed 8 on {cluster.scheduler_address} (2 worker threads)" in err
     assert (project / "dask" / "cases.csv").read_bytes() == (project / "local" / "cases.csv").read_bytes()
     assert (project / "dask" / "stats.csv").read_bytes() == (project / "local" / "stats.csv").read_bytes()
+
+
+# ---------------------------------------------------------------- when things go wrong
+
+
+def killer_sweep(project: Path, masses: list[float]) -> Path:
+    return write_sweep(project, {"deck": "seed_wri.toml",
+                                 "vary": {"body.mass": masses, "analysis.duration": [1.0]}})
+
+
+def test_a_case_that_kills_its_worker_is_failed_and_the_others_finish(project, monkeypatch):
+    import sweep_faults
+
+    from rbhyst.analyses.sweep import backends
+
+    monkeypatch.setattr(backends, "run_batch", sweep_faults.run_batch_or_die)
+    masses = [700.0 + 10 * k for k in range(9)]
+    masses.insert(4, sweep_faults.KILLER_MASS)
+    sweep = killer_sweep(project, masses)
+    t0 = time.perf_counter()
+    code, err = invoke("sweep", sweep, "--workers", "2", "--no-plots")
+    took = time.perf_counter() - t0
+    assert code == 3, err
+    assert err.splitlines()[-1] == ("error: the sweep is incomplete: case 5 killed its worker process every time "
+                                    "(failed in cases.csv, not kept): the same command tries them again, with more "
+                                    "memory per worker if that was the cause")
+    out = project / "results" / "sweep"
+    rows = read_cases(out / "cases.csv")
+    message = "killed its worker process 3 times (SIGKILL: out of memory?)"
+    assert [r["status"] for r in rows] == ["ok"] * 4 + ["failed"] + ["ok"] * 5
+    assert rows[4]["message"] == message and rows[4]["peak_u1_m"] == ""
+    assert "9 ok, 1 failed; computed 10 on 2 local workers" in err
+    assert f"warning: case 5 (deck, scale 1.0) failed: {message}" in err
+    assert journal_cases(out) == 9  # each case kept once; the killer is not kept
+    # the same command tries only the killer again, which fails again within the bound
+    code, err = invoke("sweep", sweep, "--workers", "2", "--no-plots")
+    assert code == 3 and "computed 1 on 1 local worker, 9 already in the folder" in err, err
+    assert read_cases(out / "cases.csv") == rows
+    print(f"10 cases, one killing its worker: {took:.1f} s")
+
+
+def free_port() -> int:
+    import socket
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+class DaskProcesses:
+    """A scheduler and workers of our own on 127.0.0.1, in subprocesses (each in its own
+    process group, logs in files), ended by ``stop``."""
+
+    def __init__(self, folder: Path, env: dict | None = None):
+        self.folder, self.env = folder, {**os.environ, **(env or {})}
+        self.procs: list[subprocess.Popen] = []
+
+    def _start(self, name: str, *args: str) -> subprocess.Popen:
+        log = open(self.folder / f"{name}-{len(self.procs)}.log", "w")
+        p = subprocess.Popen([sys.executable, "-m", "dask", *args], stdout=log, stderr=subprocess.STDOUT,
+                             env=self.env, start_new_session=True)
+        log.close()
+        self.procs.append(p)
+        return p
+
+    def scheduler(self, *tls: str, protocol: str = "tcp", port: int | None = None) -> tuple[subprocess.Popen, str]:
+        import socket
+
+        port = port or free_port()
+        p = self._start("scheduler", "scheduler", "--host", "127.0.0.1", "--port", str(port), "--no-dashboard",
+                        *(["--protocol", protocol] if protocol != "tcp" else []), *tls)
+        deadline = time.monotonic() + 20
+        while True:
+            assert p.poll() is None and time.monotonic() < deadline, "the scheduler did not start"
+            try:
+                socket.create_connection(("127.0.0.1", port), timeout=1).close()
+                break
+            except OSError:
+                time.sleep(0.05)
+        return p, f"{protocol}://127.0.0.1:{port}"
+
+    def workers(self, address: str, n: int = 2, *tls: str) -> subprocess.Popen:
+        return self._start("workers", "worker", address, "--nworkers", str(n), "--nthreads", "1",
+                           "--host", "127.0.0.1", "--no-dashboard", *tls)
+
+    def wait_for_workers(self, address: str, n: int = 2, security=None) -> None:
+        from distributed import Client
+
+        with Client(address, timeout=20, security=security, set_as_default=False) as client:
+            client.wait_for_workers(n, timeout=30)
+
+    def kill(self, p: subprocess.Popen) -> None:
+        try:
+            os.killpg(p.pid, signal.SIGKILL)
+        except ProcessLookupError:
+            pass
+        p.wait(10)
+
+    def stop(self) -> None:
+        for p in self.procs:
+            self.kill(p)
+
+
+@pytest.fixture
+def dask_processes(tmp_path):
+    pytest.importorskip("distributed")
+    procs = DaskProcesses(tmp_path, env={"PYTHONPATH": os.pathsep.join([str(Path(__file__).parent), str(ROOT)])})
+    try:
+        yield procs
+    finally:
+        procs.stop()
+
+
+@pytest.mark.slow
+def test_a_lost_scheduler_stops_the_sweep_and_a_new_one_completes_it(project, dask_processes):
+    n = 12
+    sweep = write_sweep(project, {"deck": "seed_wri.toml",  # 20 s of the seed's record: a second a case
+                                  "vary": {"body.mass": [800.0 + k for k in range(n)], "analysis.duration": [20.0]}})
+    out = project / "results" / "sweep"
+    scheduler, address = dask_processes.scheduler()
+    dask_processes.workers(address)
+    dask_processes.wait_for_workers(address)
+    env = {**os.environ, "DASK_DISTRIBUTED__COMM__TIMEOUTS__CONNECT": "2s"}
+    proc = subprocess.Popen([sys.executable, "-m", "rbhyst", "sweep", sweep.name, "--no-plots", "--scheduler", address],
+                            cwd=sweep.parent, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+    try:
+        wait_for(proc, out, 3)
+        dask_processes.kill(scheduler)
+        t_lost = time.monotonic()
+        _, err = proc.communicate(timeout=60)
+        took = time.monotonic() - t_lost
+    finally:
+        proc.kill()
+    kept = journal_cases(out)
+    assert proc.returncode == 3, err
+    assert 3 <= kept < n
+    assert err.splitlines()[1:] == [
+        f"error: {n - kept} case{'s' * (n - kept != 1)} could not be computed on {address} (2 worker threads): "
+        f"lost the Dask scheduler (no connection for 2 s); the {kept} finished are kept in "
+        f"{Path('results/sweep') / FOLDER}: the same command with a running scheduler (--scheduler) computes the rest"]
+    assert not (out / "cases.csv").exists()
+    print(f"scheduler lost -> sweep ended in {took:.1f} s")
+    # a new scheduler: the same command completes the sweep, computing only what is missing
+    scheduler, address = dask_processes.scheduler()
+    dask_processes.workers(address)
+    dask_processes.wait_for_workers(address)
+    proc = subprocess.run([sys.executable, "-m", "rbhyst", "sweep", sweep.name, "--no-plots", "--scheduler", address],
+                          cwd=sweep.parent, capture_output=True, text=True, env=env, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    assert f"computed {n - kept} on {address} (2 worker threads), {kept} already in the folder" in proc.stderr
+    assert journal_cases(out) == n  # every case computed once in all
+    code, err = invoke("sweep", sweep, "--no-plots", "--workers", "2", "--out", project / "local")
+    assert code == 0, err
+    assert (out / "cases.csv").read_bytes() == (project / "local" / "cases.csv").read_bytes()
+
+
+@pytest.mark.slow
+def test_on_dask_a_case_that_kills_its_workers_is_failed_and_the_others_finish(project, dask_processes,
+                                                                               monkeypatch):
+    import sweep_faults
+
+    from rbhyst.analyses.sweep import backends
+
+    monkeypatch.setattr(backends, "run_batch", sweep_faults.run_batch_or_die)
+    dask_processes.env["DASK_DISTRIBUTED__SCHEDULER__ALLOWED_FAILURES"] = "1"  # a task fails when 2 workers died
+    _, address = dask_processes.scheduler()
+    dask_processes.workers(address)
+    dask_processes.wait_for_workers(address)
+    masses = [700.0 + 10 * k for k in range(7)]
+    masses.insert(2, sweep_faults.KILLER_MASS)
+    sweep = killer_sweep(project, masses)
+    t0 = time.perf_counter()
+    code, err = invoke("sweep", sweep, "--no-plots", "--scheduler", address)
+    took = time.perf_counter() - t0
+    assert code == 3 and "error: the sweep is incomplete: case 3 killed its worker" in err, err
+    out = project / "results" / "sweep"
+    rows = read_cases(out / "cases.csv")
+    assert [r["status"] for r in rows] == ["ok"] * 2 + ["failed"] + ["ok"] * 5
+    assert rows[2]["message"] == "killed its worker 2 times (Dask KilledWorker: out of memory? see the workers' logs)"
+    assert "7 ok, 1 failed; computed 8 on" in err
+    assert journal_cases(out) == 7
+    print(f"8 cases on Dask, one killing its workers: {took:.1f} s")
+
+
+def make_certificates(folder: Path) -> dict[str, Path]:
+    """A CA and one certificate it signs for 127.0.0.1 (scheduler, workers and client), by the
+    openssl command."""
+    openssl = shutil.which("openssl")
+    if openssl is None:
+        pytest.skip("no openssl command to make TLS certificates")
+    folder.mkdir(parents=True, exist_ok=True)
+    ext = folder / "leaf.ext"
+    ext.write_text("basicConstraints = CA:FALSE\nkeyUsage = critical, digitalSignature, keyEncipherment\n"
+                   "extendedKeyUsage = serverAuth, clientAuth\nsubjectAltName = IP:127.0.0.1, DNS:localhost\n"
+                   "subjectKeyIdentifier = hash\nauthorityKeyIdentifier = keyid\n")
+
+    def run(*args: str) -> None:
+        subprocess.run([openssl, *args], cwd=folder, check=True, capture_output=True)
+
+    run("req", "-x509", "-newkey", "rsa:2048", "-nodes", "-keyout", "ca.key", "-out", "ca.pem", "-days", "2",
+        "-subj", "/CN=rbhyst test CA", "-addext", "basicConstraints=critical,CA:TRUE",
+        "-addext", "keyUsage=critical,keyCertSign,cRLSign")
+    run("req", "-newkey", "rsa:2048", "-nodes", "-keyout", "node.key", "-out", "node.csr", "-subj", "/CN=127.0.0.1")
+    run("x509", "-req", "-in", "node.csr", "-CA", "ca.pem", "-CAkey", "ca.key", "-CAcreateserial", "-out", "node.pem",
+        "-days", "2", "-extfile", "leaf.ext")
+    return {"ca": folder / "ca.pem", "cert": folder / "node.pem", "key": folder / "node.key"}
+
+
+@pytest.mark.slow
+def test_a_tls_scheduler_from_the_sweep_file_or_the_command_line(project, dask_processes, monkeypatch):
+    from distributed.security import Security
+
+    from rbhyst.analyses.sweep.backends import DaskCluster
+
+    certs = make_certificates(project / "certs")
+    stranger = make_certificates(project / "other")  # another CA's
+    tls = ("--tls-ca-file", str(certs["ca"]), "--tls-cert", str(certs["cert"]), "--tls-key", str(certs["key"]))
+    _, address = dask_processes.scheduler(*tls, protocol="tls")
+    port = address.rsplit(":", 1)[1]
+    dask_processes.workers(address, 2, *tls)
+    dask_processes.wait_for_workers(address, security=Security(
+        tls_ca_file=str(certs["ca"]), tls_client_cert=str(certs["cert"]), tls_client_key=str(certs["key"]),
+        require_encryption=True))
+    data = basic(duration=0.5)
+    sweep = write_sweep(project, {**data, "cluster": {"scheduler": address, "tls_ca_file": "certs/ca.pem",
+                                                      "tls_cert": "certs/node.pem", "tls_key": "certs/node.key"}})
+    code, err = invoke("sweep", sweep, "--no-plots")
+    assert code == 0, err
+    assert f"computed 8 on {address} (2 worker threads)" in err
+    # the same on the command line; and locally with --workers, whatever the file says
+    plain = write_sweep(project, data, name="plain")
+    code, err = invoke("sweep", plain, "--no-plots", "--scheduler", address, *tls, "--out", project / "cli")
+    assert code == 0, err
+    code, err = invoke("sweep", sweep, "--no-plots", "--workers", "2", "--out", project / "local")
+    assert code == 0 and "computed 8 on 2 local workers" in err
+    local = (project / "local" / "cases.csv").read_bytes()
+    assert (project / "results" / "sweep" / "cases.csv").read_bytes() == local
+    assert (project / "cli" / "cases.csv").read_bytes() == local
+    # without the certificates, or not over TLS: refused, one line
+    monkeypatch.setattr(DaskCluster, "LOST_AFTER_S", 3.0)
+    for args, line in [
+        (("--scheduler", address), f"--scheduler: {address}: needs its TLS files: --tls-ca-file, --tls-cert and "
+                                   "--tls-key (or tls_ca_file, tls_cert and tls_key in the sweep file's [cluster])"),
+        (("--scheduler", f"tcp://127.0.0.1:{port}"), f"--scheduler: cannot reach tcp://127.0.0.1:{port} ("),
+        (("--scheduler", address, "--tls-ca-file", str(stranger["ca"]), "--tls-cert", str(stranger["cert"]),
+          "--tls-key", str(stranger["key"])), f"--scheduler: cannot reach {address} ("),
+    ]:
+        t0 = time.perf_counter()
+        code, err = invoke("sweep", plain, "--no-plots", *args, "--out", project / "refused")
+        assert code == 2 and len(err.splitlines()) == 1 and err.startswith(f"error: {line}"), err
+        print(f"{args[1]}: {err.strip()} ({time.perf_counter() - t0:.1f} s)")
+    assert not (project / "refused").exists()  # nothing written
+
+
+@pytest.mark.parametrize("cluster, args, lines", [
+    (None, ("--tls-cert", "{folder}/seed_wri.toml"), ["--tls-cert: only with --scheduler (a Dask scheduler that wants TLS)"]),
+    (None, ("--scheduler", "tcp://127.0.0.1:1", "--tls-ca-file", "{folder}/seed_wri.toml", "--tls-cert",
+            "{folder}/nope.pem"),
+     ["--tls-cert: {folder}/nope.pem: no such file",
+      "--scheduler: tcp://127.0.0.1:1: with TLS certificates the address is tls://host:port"]),
+    ({"scheduler": "tls://127.0.0.1:1", "tls_cert": "seed_wri.toml"}, (),
+     ["cluster.tls_ca_file: missing: TLS needs the certificate of the CA that signed the scheduler's"]),
+    ({"scheduler": "tls://127.0.0.1:1", "tls_ca_file": "certs/ca.pem", "tls_cert": "seed_wri.toml"},
+     ("--tls-key", "{folder}/notes.txt"), ["cluster.tls_ca_file: {folder}/certs/ca.pem: no such file"]),
+    ({"scheduler": "tls://127.0.0.1:1", "tls_certificate": "ca.pem"}, (), ["cluster.tls_certificate: unknown key"]),
+    ({"scheduler": "tls://127.0.0.1:1"}, ("--workers", "2", "--tls-key", "{folder}/notes.txt"),
+     ["--tls-key: only with --scheduler (a Dask scheduler that wants TLS)"]),
+    ({"scheduler": ""}, (), ["cluster.scheduler: String should have at least 1 character"]),
+])
+def test_cluster_mistakes_are_one_line_each_and_nothing_is_written(project, cluster, args, lines):
+    data = basic(duration=0.5)
+    if cluster is not None:
+        data["cluster"] = cluster
+    sweep = write_sweep(project, data)
+    before = snapshot(project)
+    code, err = invoke("sweep", sweep, *[a.format(folder=project) for a in args])
+    assert code == 2
+    assert err.splitlines() == [f"error: {x.format(folder=project)}" for x in lines]
+    assert snapshot(project) == before
+
+
+def test_a_sweep_writes_only_into_its_output_folder(project):
+    """Paths in a deck or a sweep file are read, never written to: a deck's output.directory
+    (relative, absolute, its own folder), set in the deck or varied by the sweep, is left out
+    of a sweep: everything goes into the sweep's output folder."""
+    root = project.parent
+    decks = root / "decks"
+    decks.mkdir()
+    data = _toml(project / "seed_wri.toml")
+    data["output"] = {**data.get("output", {}), "directory": "."}
+    for c in ("x1", "x2"):
+        f = data["excitation"]["support"][c].get("file")
+        if f:
+            data["excitation"]["support"][c]["file"] = str(project / f)
+    (decks / "deck.toml").write_text(tomli_w.dumps(data))
+    sweep = write_sweep(project, {"deck": "../decks/deck.toml", "motions": [{"name": "syn", **SYN}],
+                                  "vary": {"output.directory": ["../elsewhere", str(root / "absolute"), "/", "."],
+                                           "analysis.duration": [0.5]}})
+    before = snapshot(root)
+    args = ("--save-histories",) if __import__("importlib").util.find_spec("pyarrow") else ()
+    code, err = invoke("sweep", sweep, *args)
+    assert code == 0, err
+    after = snapshot(root)
+    changed = {k for k in after if before.get(k) != after[k]} | (set(before) - set(after))
+    assert changed and all(k.startswith("study/results/sweep/") for k in changed), changed
+    assert not (root / "elsewhere").exists() and not (root / "absolute").exists()
+    rows = read_cases(project / "results" / "sweep" / "cases.csv")
+    assert [r["output.directory"] for r in rows] == ["../elsewhere", str(root / "absolute"), "/", "."]
+    assert len({r["peak_u1_m"] for r in rows}) == 1  # one computation: output.directory is not in the key
+
+
+@pytest.mark.slow
+def test_a_second_sweep_into_the_same_folder_is_refused_and_kill_9_leaves_no_lock(project):
+    import psutil
+
+    sweep = long_sweep(project, 16)
+    out = project / "results" / "sweep"
+    proc = start(sweep)
+    try:
+        wait_for(proc, out, 2)
+        code, err = invoke("sweep", sweep, "--workers", "1", "--no-plots")
+        assert code == 2
+        assert err.splitlines() == [f"error: {out}: another rbhyst sweep is writing into this folder"]
+        workers = workers_of(proc)
+        proc.kill()  # SIGKILL: no cleanup of its own
+        proc.communicate(timeout=30)
+    finally:
+        proc.kill()
+    _, alive = psutil.wait_procs(workers, timeout=10)
+    assert not alive  # its workers end with it
+    kept = journal_cases(out)
+    proc = start(sweep)
+    _, err = proc.communicate(timeout=120)
+    assert proc.returncode == 0, err
+    assert f"computed {16 - kept} on 2 local workers, {kept} already in the folder" in err
+
+
+@pytest.mark.slow
+def test_a_scheduler_back_within_the_timeout_costs_only_the_batches_in_flight(project, dask_processes):
+    n = 12
+    sweep = write_sweep(project, {"deck": "seed_wri.toml",
+                                  "vary": {"body.mass": [800.0 + k for k in range(n)], "analysis.duration": [20.0]}})
+    out = project / "results" / "sweep"
+    scheduler, address = dask_processes.scheduler()
+    dask_processes.workers(address)
+    dask_processes.wait_for_workers(address)
+    env = {**os.environ, "DASK_DISTRIBUTED__COMM__TIMEOUTS__CONNECT": "20s"}
+    proc = subprocess.Popen([sys.executable, "-m", "rbhyst", "sweep", sweep.name, "--no-plots", "--scheduler", address],
+                            cwd=sweep.parent, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+    try:
+        wait_for(proc, out, 3)
+        dask_processes.kill(scheduler)
+        kept = journal_cases(out)
+        time.sleep(1.0)
+        _, again = dask_processes.scheduler(port=int(address.rsplit(":", 1)[1]))
+        assert again == address
+        dask_processes.workers(address)
+        _, err = proc.communicate(timeout=90)
+    finally:
+        proc.kill()
+    assert proc.returncode == 0, err
+    assert kept < n
+    said = err.splitlines()
+    assert len(said) == 3 and said[1].startswith(f"{n} ok, 0 failed; computed {n} on {address}"), err
+    assert journal_cases(out) == n

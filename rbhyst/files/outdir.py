@@ -94,6 +94,14 @@ def staged_directory(target: Path, add: bool = False):
         raise
 
 
+def check_free(target: Path, files: list[str]) -> None:
+    """Before long work: the InputError staged_directory would raise at the end if any of
+    ``files`` (relative, '/'-separated) is in ``target`` and is not rbhyst's."""
+    target = Path(target)
+    if target.is_dir():
+        _check_in_the_way(target, files, read_manifest(target))
+
+
 def replace_own_file(path: Path, text: str, mark: str) -> None:
     """Write ``text`` (whose first line starts with ``mark``) to ``path`` atomically.
 

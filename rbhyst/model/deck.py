@@ -277,6 +277,39 @@ class Pulse(_Model, Generic[U]):
     start: Annotated[float, Field(ge=0)] = 0.0
 
 
+PSD_UNITS = Literal["g2/Hz", "(m/s2)2/Hz"]
+
+
+class Random(_Model):
+    """A stationary Gaussian support acceleration with a power spectral density: breakpoints
+    [[frequency_hz, value], ...] (log-log between them, as MIL-STD-810 tables give them) or a CSV
+    file of them; ``duration`` s long, the same history for the same ``seed`` (see
+    rbhyst.model.random_vibration). ``dt``: its sample step (default a tenth of the period
+    of the PSD's highest frequency); ``scale`` multiplies the history (the PSD by its square)."""
+
+    type: Literal["random"]
+    psd: str | list[list[float]]
+    units: PSD_UNITS
+    duration: PosFloat
+    seed: Annotated[int, Field(ge=0)]
+    dt: PosFloat | None = None
+    scale: float = 1.0
+
+    @field_validator("psd", mode="before")
+    @classmethod
+    def _breakpoints(cls, v):
+        if isinstance(v, list):
+            from rbhyst.model.random_vibration import psd_problems
+
+            problems = psd_problems(v)
+            if problems and problems[0][0] is None:
+                raise ValueError(problems[0][1])
+            if problems:
+                raise _key_problems(problems)
+            return [[float(x) for x in p] for p in v]
+        return v
+
+
 def _signal_kind(v: Any) -> str:
     kind = v.get("type", "record") if isinstance(v, dict) else getattr(v, "type", "record")
     return "pulse" if kind in PULSES else kind
@@ -290,9 +323,18 @@ def _signal(units):
     ]
 
 
+def _support_signal():
+    """What a support acceleration may be: a signal of _signal, or random vibration."""
+    return Annotated[
+        Union[Annotated[Record[AccelUnits], Tag("record")], Annotated[Sine[AccelUnits], Tag("sine")],
+              Annotated[Pulse[AccelUnits], Tag("pulse")], Annotated[Random, Tag("random")]],
+        Discriminator(_signal_kind),
+    ]
+
+
 class Support(_Model):
-    x1: _signal(AccelUnits) | None = None
-    x2: _signal(AccelUnits) | None = None
+    x1: _support_signal() | None = None
+    x2: _support_signal() | None = None
 
 
 class Force(_Model):
@@ -430,6 +472,35 @@ class Loops(_Model):
     points_per_cycle: Annotated[int, Field(ge=8)] = 2000
 
 
+class Qualify(_Model):
+    """What ``rbhyst qualify`` holds the deck to (see README, "Qualification"): a required
+    response spectrum (a standard's, or files), the motions, and the limits."""
+
+    standard: Literal["ac156"] | None = None
+    sds: PosFloat | None = None  # g, with standard = "ac156"
+    z_over_h: Annotated[float, Field(ge=0, le=1)] | None = None
+    rrs: str | None = None  # a CSV RRS for x1 (horizontal), instead of a standard
+    rrs_x2: str | None = None  # ... and for x2 (vertical)
+    rrs_damping: Ratio | None = None
+    #: how many motions to make, or "deck": the deck's own excitation.support
+    motions: Annotated[int, Field(ge=1)] | Literal["deck"] = 1
+    seed: Annotated[int, Field(ge=0)] = 1
+    duration: PosFloat = 30.0  # s, of each motion made
+    motion_dt: PosFloat = 0.005  # s, their sample step
+    #: peak total acceleration allowed at a point of interest ("G": the mass centre), g: one
+    #: number for both directions or [x1, x2]
+    acceleration_limit_g: dict[str, PosFloat | Annotated[list[PosFloat], Field(min_length=2, max_length=2)]] | None \
+        = None
+    #: the force each element can take, N: one number for all, or by CSV name (e1, e2, ...)
+    force_capacity_N: PosFloat | dict[str, PosFloat] | None = None
+
+    @model_validator(mode="after")
+    def _one_spectrum(self):
+        if self.standard is not None and self.rrs is not None:
+            raise _key_problems([("rrs", "not with qualify.standard: give a standard or RRS files")])
+        return self
+
+
 class Deck(_Model):
     title: str | None = None
     body: Body | None = None
@@ -441,6 +512,7 @@ class Deck(_Model):
     analysis: Analysis | None = None
     output: Output = Output()
     loops: Loops | None = None
+    qualify: Qualify | None = None
     #: the file the deck came from (None for one built in code): relative paths resolve beside it
     _source: Path | None = PrivateAttr(default=None)
 
@@ -669,7 +741,7 @@ def _format_loc(loc: tuple) -> str:
     for part in loc:
         if isinstance(part, int):
             out += f"[{part + 1}]"
-        elif part in ("record", "sine", "pulse") or str(part).startswith(("Record[", "Sine[", "Pulse[")):
+        elif part in ("record", "sine", "pulse", "random") or str(part).startswith(("Record[", "Sine[", "Pulse[")):
             continue  # the union's tag is noise to a user
         elif re.fullmatch(r"[A-Za-z0-9_\-]+", str(part)):
             out += ("." if out else "") + str(part)
@@ -692,8 +764,12 @@ def _messages(err: ValidationError) -> list[str]:
             lines += [f"{_format_loc((*e['loc'], key))}: {m}" for key, m in e["ctx"]["problems"]]
             continue
         elif e["type"] == "union_tag_invalid":
-            msg = (f"unknown type {e['ctx']['tag']!r}: use type = \"sine\" or a pulse "
+            support = "support" in e["loc"]
+            random = ", \"random\"" if support else ""
+            msg = (f"unknown type {e['ctx']['tag']!r}: use type = \"sine\"{random} or a pulse "
                    f"({', '.join(repr(p) for p in PULSES)}), or give `file` (and no type) for a record")
+            if e["ctx"]["tag"] == "random" and not support:
+                msg = "type \"random\" is random vibration of the support: excitation.support.x1 or x2 only"
         lines.append(f"{_format_loc(e['loc'])}: {msg}")
     return list(dict.fromkeys(lines))
 

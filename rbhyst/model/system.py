@@ -385,6 +385,9 @@ def _signal(spec, scale_units: dict[str, float], base: Path,
             notes: list[str]) -> tuple[Signal, float | None]:
     """A callable of time in SI units and the signal's own end; what the run should say about
     the signal goes to ``notes``."""
+    if isinstance(spec, dk.Random):
+        series = random_series(spec, base)
+        return series, series.duration
     factor = scale_units[spec.units]
     if isinstance(spec, dk.Sine):
         s = signals.sine(spec.amplitude * factor, spec.frequency_hz, spec.phase_deg, spec.start, spec.cycles,
@@ -401,6 +404,19 @@ def _signal(spec, scale_units: dict[str, float], base: Path,
     notes.extend(record.notes)
     series = Series(record.series.t0, record.series.dt, record.series.values * factor * spec.scale)
     return series, series.duration
+
+
+def random_series(spec: "dk.Random", base: Path) -> Series:
+    """Random vibration made once into samples (cached per process), from then on a record."""
+    from rbhyst.model.random_vibration import cached_history, load_psd, size_problems
+
+    psd = load_psd(spec.psd, spec.units, base)
+    problems = size_problems(psd, spec.duration, spec.dt, "")
+    if problems:  # (the caller puts the signal's place in front)
+        raise InputError([p.lstrip(".") for p in problems])
+    key = (tuple(map(float, psd.frequency_hz)), tuple(map(float, psd.value)))
+    step, values = cached_history(key, float(spec.duration), int(spec.seed), spec.dt)
+    return Series(0.0, step, values * spec.scale if spec.scale != 1.0 else values)
 
 
 def _excitation(deck: dk.Deck, base: Path, body: Body, notes: list[str]) -> Excitation:

@@ -5,11 +5,14 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from rbhyst.solve.located import SPECTRA_COLUMNS, LocatedSpectra
 from rbhyst.solve.result import Result
+
+if TYPE_CHECKING:  # pragma: no cover
+    from rbhyst.solve.located import LocatedSpectra
 
 
 class CsvWriter:
@@ -43,7 +46,9 @@ def write_summary(result: Result, path: Path) -> None:
     Path(path).write_text(json.dumps(result.summary(), indent=2) + "\n")
 
 
-def write_spectra_csv(spectra: LocatedSpectra, path: Path) -> None:
+def write_spectra_csv(spectra: "LocatedSpectra", path: Path) -> None:
+    from rbhyst.solve.located import SPECTRA_COLUMNS  # (the spectra's kernels only where there are spectra)
+
     labels, numbers = spectra.table()
     lines = [",".join(SPECTRA_COLUMNS)]
     lines += [f"{loc},{direction}," + ",".join(f"{v:.10g}" for v in row)

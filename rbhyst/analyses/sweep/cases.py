@@ -21,8 +21,9 @@ from typing import Any
 from rbhyst._version import __version__
 from rbhyst.model.deck import ACCEL_UNITS, Deck, load_deck, parse_deck
 from rbhyst.errors import InputError
-from rbhyst.analyses.sweep.motions import (DECK_MOTION, SIGNAL_KEYS, FileDigests, SweepMotion, absolute_files, deck_support, peak_acceleration, scaled, sweep_motions)
-from rbhyst.analyses.sweep.spec import SweepSpec, read_spec
+from rbhyst.analyses.sweep.motions import (DECK_MOTION, SIGNAL_KEYS, FileDigests, SweepMotion, absolute_files,
+                                           deck_support, peak_acceleration, scaled, sweep_motions)
+from rbhyst.analyses.sweep.spec import Cluster, SweepSpec, read_spec
 
 
 @dataclass(frozen=True)
@@ -66,6 +67,7 @@ class Sweep:
     vary_keys: list[str]
     cases: list[Case] = field(default_factory=list)
     fragility: Any = None  # analyses.fragility.FragilityPlan, with [[limit_states]]
+    cluster: Cluster | None = None  # the sweep file's [cluster], its files' paths absolute
 
     @property
     def stem(self) -> str:
@@ -108,16 +110,18 @@ def load_sweep(path: str | Path) -> Sweep:
     for m in motions:  # every file named must exist before anything runs
         for c in ("x1", "x2"):
             comp = (m.support or {}).get(c)
-            if comp and comp.get("file"):
-                try:
-                    digests(comp["file"])
-                except InputError as err:
-                    problems.append(f"{m.where}.{c}.file: {err.problems[0]}")
+            for key in ("file", "psd"):  # a record, a random signal's PSD file
+                if comp and isinstance(comp.get(key), str):
+                    try:
+                        digests(comp[key])
+                    except InputError as err:
+                        problems.append(f"{m.where}.{c}.{key}: {err.problems[0]}")
     if problems:
         raise InputError(problems)
     combos, vary_keys = _combinations(spec, [m.name for m in motions], levels)
     sweep = Sweep(path=path, spec=spec, deck_path=deck_path, base=base, scale_kind=kind, levels=levels,
-                  motions=[m.name for m in motions], vary_keys=vary_keys)
+                  motions=[m.name for m in motions], vary_keys=vary_keys,
+                  cluster=spec.cluster.resolved(here) if spec.cluster is not None else None)
     sweep.cases = _cases(deck, motions, combos, kind, own, digests)
     if spec.limit_states:
         from rbhyst.analyses.fragility import plan_fragility
@@ -233,12 +237,14 @@ def case_key(deck: Deck, digests: FileDigests) -> str:
     """sha256 (hex, first 32 digits) of what the case's result depends on (see the module)."""
     data = deck.model_dump(mode="json")
     data.pop("title", None)
+    data.pop("qualify", None)  # what `rbhyst qualify` holds the deck to: no number of a run
     data["output"] = {"every": data["output"]["every"]}
     ex = data.get("excitation") or {}
     for group, comp in SIGNAL_KEYS:
         sig = (ex.get(group) or {}).get(comp)
-        if isinstance(sig, dict) and sig.get("file") is not None:
-            p = Path(sig["file"])
-            sig["file"] = "sha256:" + digests(str(p if p.is_absolute() else deck.base / p))
+        for key in ("file", "psd"):  # a record's file, a random signal's PSD file
+            if isinstance(sig, dict) and isinstance(sig.get(key), str):
+                p = Path(sig[key])
+                sig[key] = "sha256:" + digests(str(p if p.is_absolute() else deck.base / p))
     text = json.dumps({"deck": data, "rbhyst_version": __version__}, sort_keys=True, allow_nan=False)
     return hashlib.sha256(text.encode()).hexdigest()[:32]

@@ -49,12 +49,14 @@ def sweep_motions(spec: SweepSpec, sweep_dir: Path) -> list[SweepMotion]:
 
 
 def absolute_files(support: dict, base: Path) -> dict:
-    """A copy of signals' data with each record ``file`` made absolute against ``base``."""
+    """A copy of signals' data with each record ``file`` (and a random signal's PSD file) made
+    absolute against ``base``."""
     out = copy.deepcopy(support)
     for comp in out.values():
-        if isinstance(comp, dict) and comp.get("file") is not None:
-            p = Path(comp["file"])
-            comp["file"] = str(p if p.is_absolute() else (base / p).resolve())
+        for key in ("file", "psd"):
+            if isinstance(comp, dict) and isinstance(comp.get(key), str):
+                p = Path(comp[key])
+                comp[key] = str(p if p.is_absolute() else (base / p).resolve())
     return out
 
 
@@ -128,7 +130,8 @@ def scaled(support: dict, factor: float) -> dict:
 
 def peak_acceleration(support: dict) -> float:
     """The larger of the components' peak |acceleration| in m/s2: over a record's samples (a
-    line between samples peaks at one), a sine's amplitude. Unreadable records raise InputError."""
+    line between samples peaks at one; random vibration's made as a run makes them), a sine's
+    amplitude. Unreadable records raise InputError."""
     from rbhyst.files.units import check_declared
     from rbhyst.model.records import read_record
 
@@ -136,6 +139,13 @@ def peak_acceleration(support: dict) -> float:
     for c in ("x1", "x2"):
         comp = support.get(c)
         if comp is None:
+            continue
+        if comp.get("type") == "random":  # made into its samples, as a run makes it
+            from rbhyst.model.deck import Random
+            from rbhyst.model.system import random_series
+
+            series = random_series(Random.model_validate(comp), Path.cwd())
+            peak = max(peak, float(np.max(np.abs(series.values))))
             continue
         factor = ACCEL_UNITS[comp["units"]]
         if comp.get("type") == "sine":

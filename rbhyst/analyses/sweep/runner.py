@@ -46,6 +46,7 @@ class Outcome:
     missing: list[str] = field(default_factory=list)  # keys lost with a worker
     missing_reason: str = ""
     notes: list[str] = field(default_factory=list)  # said before the cases run
+    missing_rest: str = "the same command computes the rest"  # how they can be computed
     where: str = ""
     t_start: float = 0.0
     t_first: float | None = None  # when the first batch came back (a worker started and ran it)
@@ -61,6 +62,11 @@ class Outcome:
     @property
     def ok(self) -> int:
         return sum(1 for c in self.sweep.cases if not c.problem and self.results.get(c.key, {}).get("status") == "ok")
+
+    @property
+    def killed(self) -> list[int]:
+        """The numbers of the cases that killed their workers (failed, not kept: incomplete)."""
+        return [c.number for c in self.sweep.cases if self.results.get(c.key, {}).get("killed")]
 
     def table(self) -> tuple[list[str], list[list]]:
         """cases.csv's header and rows."""
@@ -100,7 +106,8 @@ def check_out(out: Path, names: list[str]) -> None:
 def run_sweep(sweep: Sweep, out: str | Path | None = None, workers: int | None = None,
               scheduler: str | None = None, fresh: bool = False, save_histories: bool = False,
               plots: bool = True, progress: Progress | None = None,
-              started: Callable[["Outcome", int], None] | None = None, plotter=None) -> Outcome:
+              started: Callable[["Outcome", int], None] | None = None, tls_ca_file: str | Path | None = None,
+              tls_cert: str | Path | None = None, tls_key: str | Path | None = None, plotter=None) -> Outcome:
     """Compute what ``out`` (default results/<sweep stem>/ beside the sweep file) does not hold
     yet and write the sweep's files. Raises SweepIncomplete when cases were lost with a worker
     or the cluster (what finished is kept: the same call computes the rest).
@@ -108,17 +115,17 @@ def run_sweep(sweep: Sweep, out: str | Path | None = None, workers: int | None =
     ``started(outcome, n)`` is called once the folder is checked and the workers are ready
     to compute ``n`` cases (0: the folder holds them all); ``progress(done, failed, n)`` as
     batches come back. ``plots`` are drawn by ``plotter`` (``PLOT_FILES``, ``write_plots``:
-    rbhyst.report.sweep, which rbhyst.sweep.run_sweep gives)."""
+    rbhyst.report.sweep, which rbhyst.sweep.run_sweep gives).
+
+    ``scheduler`` and the ``tls_*`` files (a scheduler that wants TLS) default to the sweep
+    file's ``[cluster]``; ``workers`` runs locally whatever the file says."""
     if plots and plotter is None:
         raise TypeError("plots need a plotter (rbhyst.report.sweep): call rbhyst.sweep.run_sweep")
     plotter = plotter if plots else None
-    from rbhyst.analyses.sweep.backends import DaskCluster, LocalPool, default_workers
+    from rbhyst.analyses.sweep.backends import DaskCluster, LocalPool, cluster_settings, default_workers
 
     out = Path(out) if out is not None else sweep.default_out()
-    if workers is not None and workers < 1:
-        raise InputError(f"--workers: {workers} must be at least 1")
-    if workers is not None and scheduler is not None:
-        raise InputError("--workers: not with --scheduler (the cluster's workers run the cases)")
+    scheduler, tls = cluster_settings(sweep.cluster, workers, scheduler, tls_ca_file, tls_cert, tls_key)
     if save_histories:
         from rbhyst.analyses.sweep.histories import require_pyarrow
 
@@ -144,14 +151,20 @@ def run_sweep(sweep: Sweep, out: str | Path | None = None, workers: int | None =
             todo[c.key] = c.values
     outcome.notes.extend(damage_notes(sweep, untrusted))
     outcome.reused = sum(1 for c in sweep.cases if c.key in outcome.results)
+    # a scheduler that cannot be reached (or refuses the certificates) is an input error: before
+    # the journal is made, so that nothing is written
+    backend = DaskCluster(scheduler, sweep.base, save_histories, tls=tls) if todo and scheduler is not None else None
     try:
-        journal.open()
+        try:
+            journal.open()
+        except BaseException:
+            if backend is not None:
+                backend.close()
+            raise
         if not todo and started:
             started(outcome, 0)
         if todo:
-            if scheduler is not None:
-                backend = DaskCluster(scheduler, sweep.base, save_histories)
-            else:
+            if backend is None:
                 backend = LocalPool(min(workers or default_workers(), len(todo)), sweep.base, save_histories)
             outcome.where = backend.where
             if started:
@@ -160,9 +173,9 @@ def run_sweep(sweep: Sweep, out: str | Path | None = None, workers: int | None =
         outcome.t_end = time.perf_counter()
         if outcome.missing:
             n = len(outcome.missing)
-            raise SweepIncomplete(f"{n} case{'s' * (n != 1)} could not be computed ({outcome.where}: "
-                                  f"{outcome.missing_reason}); the {len(outcome.results)} finished are kept in "
-                                  f"{journal.folder}: the same command computes the rest", outcome)
+            raise SweepIncomplete(f"{n} case{'s' * (n != 1)} could not be computed on {outcome.where}: "
+                                  f"{outcome.missing_reason}; the {len(outcome.results)} finished are kept in "
+                                  f"{journal.folder}: {outcome.missing_rest}", outcome)
         _write(outcome, journal, save_histories, plotter)
     finally:
         journal.close()
@@ -172,15 +185,27 @@ def run_sweep(sweep: Sweep, out: str | Path | None = None, workers: int | None =
 def _compute(backend, todo: list[tuple[str, dict]], journal: Journal, outcome: Outcome,
              save_histories: bool, progress: Progress | None) -> None:
     queue = deque(todo)
+    solo: deque = deque()  # cases whose worker died: each runs alone, so that a death names its case
     inflight: dict[object, list[tuple[str, dict]]] = {}
+    alone: set = set()  # the future of a case running alone
     done = failed = 0
     per_case: float | None = None  # seconds a case takes in a worker
     killed = False
     if progress:
         progress(0, 0, len(todo))
+
+    def lose(err: WorkerLost, reason: str | None = None) -> None:
+        outcome.missing_reason = reason or str(err)
+        outcome.missing_rest = err.rest or outcome.missing_rest
+
     try:
-        while queue or inflight:
-            while queue and len(inflight) < backend.slots:
+        while queue or solo or inflight:
+            if solo and not inflight:
+                case = solo.popleft()
+                f = backend.submit([case])
+                inflight[f] = [case]
+                alone.add(f)
+            while queue and not solo and not alone and len(inflight) < backend.slots:
                 n = batch_size(len(queue), backend.workers, per_case)
                 batch = [queue.popleft() for _ in range(n)]
                 f = backend.submit(batch)
@@ -188,30 +213,41 @@ def _compute(backend, todo: list[tuple[str, dict]], journal: Journal, outcome: O
             try:
                 finished = backend.wait(inflight, 0.2)
             except WorkerLost as err:
-                outcome.missing_reason = str(err)
+                lose(err)
                 outcome.missing.extend(k for b in inflight.values() for k, _ in b)
-                outcome.missing.extend(k for k, _ in queue)
+                outcome.missing.extend(k for k, _ in [*solo, *queue])
                 return
             for f in finished:
                 batch = inflight.pop(f)
                 try:
                     results = backend.result(f)
                 except WorkerLost as err:
-                    action = backend.recover()
-                    outcome.missing_reason = str(err)
-                    if action == "requeue":  # the pool is new: every batch in flight runs again
-                        for b in [batch, *inflight.values()]:
-                            queue.extendleft(reversed(b))
+                    r = backend.recover(err, f, batch, inflight, f in alone)
+                    alone.discard(f)
+                    lose(err, r.reason)
+                    if r.all_inflight:  # none of them will answer: r says what to run again
                         inflight.clear()
+                        alone.clear()
+                    queue.extendleft(reversed(r.again))
+                    solo.extend(r.alone)
+                    if r.failed:
+                        _keep(r.failed, journal, outcome, save_histories)
+                        done += len(r.failed)
+                        failed += len(r.failed)
+                        if progress:
+                            progress(done, failed, len(todo))
+                    outcome.missing.extend(k for k, _ in r.lost)
+                    if r.stop:
+                        outcome.missing.extend(k for b in inflight.values() for k, _ in b)
+                        outcome.missing.extend(k for k, _ in [*solo, *queue])
+                        inflight.clear()
+                        solo.clear()
+                        queue.clear()
+                        return
+                    if r.all_inflight:
                         break
-                    if action == "drop":
-                        outcome.missing.extend(k for k, _ in batch)
-                        continue
-                    outcome.missing.extend(k for b in [batch, *inflight.values()] for k, _ in b)
-                    outcome.missing.extend(k for k, _ in queue)
-                    inflight.clear()
-                    queue.clear()
-                    return
+                    continue
+                alone.discard(f)
                 _keep(results, journal, outcome, save_histories)
                 if outcome.t_first is None:
                     outcome.t_first = time.perf_counter()
@@ -276,7 +312,7 @@ def _keep(results: list[dict], journal: Journal, outcome: Outcome, save_historie
         for r in results:
             if r["status"] == "ok":
                 r["history"], r["history_sha256"] = name, digest
-    keep = [r for r in results if not r.get("internal")]
+    keep = [r for r in results if not (r.get("internal") or r.get("killed"))]
     if keep:
         journal.add(keep)
     for r in results:

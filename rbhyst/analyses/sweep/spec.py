@@ -128,6 +128,23 @@ class FragilityOptions(_Model):
         return self
 
 
+class Cluster(_Model):
+    """Where the cases run instead of local workers: a Dask scheduler, and the files of its TLS
+    (the CA's certificate, this client's certificate and key; relative to the sweep file)."""
+
+    scheduler: Name | None = None
+    tls_ca_file: Name | None = None
+    tls_cert: Name | None = None
+    tls_key: Name | None = None
+
+    def resolved(self, here: Path) -> "Cluster":
+        """The same, with the files' paths absolute (relative ones against ``here``)."""
+        return self.model_copy(update={k: str(here / v) for k in TLS_KEYS if (v := getattr(self, k)) is not None})
+
+
+TLS_KEYS = ("tls_ca_file", "tls_cert", "tls_key")
+
+
 class SweepSpec(_Model):
     deck: str
     motions: Annotated[list[Motion], Field(min_length=1)] | None = None
@@ -137,6 +154,9 @@ class SweepSpec(_Model):
     cases: Annotated[list[CaseSpec], Field(min_length=1)] | None = None
     limit_states: Annotated[list[LimitState], Field(min_length=1)] | None = None
     fragility: FragilityOptions | None = None
+
+
+    cluster: Cluster | None = None
 
     @field_validator("vary", mode="before")
     @classmethod

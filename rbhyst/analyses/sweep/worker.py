@@ -9,6 +9,7 @@ the records it read, by path and modification time).
 from __future__ import annotations
 
 import math
+import os
 import signal
 import time
 from typing import Any
@@ -19,11 +20,18 @@ from rbhyst._version import __version__
 from rbhyst.errors import AnalysisError, InputError
 
 _bases: dict[str, Any] = {}
+#: a local worker's place on its pool's board: (the board, the index of its pid there)
+_slot: tuple[Any, int] | None = None
 
 
-def init_local_worker() -> None:
+def init_local_worker(board=None, taken=None) -> None:
     """A local pool's worker: Ctrl-C reaches the whole process group, but only the sweep's own
-    process decides what to do (it ends the workers); a worker whose parent dies ends too."""
+    process decides what to do (it ends the workers); a worker whose parent dies ends too.
+
+    ``board`` (shared memory, two integers per worker: its pid and the batch it runs) and
+    ``taken`` (how many slots of it are taken) let the pool know which batch a worker that
+    died was running."""
+    global _slot
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     try:  # Linux: SIGTERM when the parent dies, so that no worker outlives a killed sweep
         import ctypes
@@ -31,6 +39,25 @@ def init_local_worker() -> None:
         ctypes.CDLL(None).prctl(1, signal.SIGTERM)  # PR_SET_PDEATHSIG
     except Exception:  # pragma: no cover - not Linux
         pass
+    if board is not None:
+        with taken.get_lock():
+            i = taken.value % (len(board) // 2)
+            taken.value += 1
+        _slot = (board, 2 * i)
+        board[2 * i + 1] = 0
+        board[2 * i] = os.getpid()
+
+
+def run_tracked(batch: int, run, *args):
+    """``run(*args)`` with ``batch`` on the board while it runs (see init_local_worker)."""
+    if _slot is None:
+        return run(*args)
+    board, i = _slot
+    board[i + 1] = batch
+    try:
+        return run(*args)
+    finally:
+        board[i + 1] = 0
 
 
 def run_batch(base, cases: list[tuple[str, dict]], histories: bool = False) -> list[dict]:

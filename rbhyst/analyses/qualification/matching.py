@@ -1,0 +1,415 @@
+"""Spectrum-compatible support motions: envelope-shaped band-limited noise whose Fourier
+amplitudes are iterated until its response spectrum (the TRS) lies in the RRS's band.
+
+The method (the stationary-process-times-envelope form of Gasparini and Vanmarcke's SIMQKE,
+1976, with the Fourier-amplitude iteration spectral-matching codes such as REQPY apply to
+their wavelet details):
+
+1. Gaussian white noise from numpy's PCG64 (``default_rng([seed, motion, axis])``: the same
+   seed gives the same numbers on every machine), its Fourier amplitudes shaped by the RRS and
+   band-limited (a smooth high-pass an octave below the checked range, a low-pass towards the
+   Nyquist frequency): a stationary process s(t).
+2. The motion is e(t) s(t) with an envelope e that rises over the first ramp (a raised cosine),
+   holds 1 over the strong-motion part and falls over the last, then corrected to end at rest
+   (below).
+3. Its TRS is computed at 1/12-octave control frequencies (and every 1/6-octave check
+   frequency) by rbhyst.response, the same oscillators ``rbhyst spectrum`` uses, the record
+   followed by rest as that command follows it; the Fourier amplitudes of s are multiplied by
+   the ratio aimed-at / TRS, interpolated on log frequency, and the loop goes on until the TRS
+   lies within the band at every check frequency, with a margin for the rounding of the file.
+   The aim is sqrt(0.9 x 1.3) = 1.08 times the RRS, the middle of AC156's band in logarithm.
+
+**End at rest.** The analysis takes a record as linear between its samples, so its velocity
+and displacement are exact integrals of that; a correction e(t) (c0 + c1 tau + c2 tau^2 + c3
+tau^3), tau = t / T, is subtracted with the c that make the final velocity and displacement
+zero and, within that, the displacement history least (a constrained least-squares problem):
+the support ends where it started, at rest, to rounding.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from rbhyst.errors import AnalysisError, InputError
+from rbhyst.analyses.qualification.rrs import AC156_DURATION, AC156_STRONG, G, RRS, sixth_octave
+
+#: the TRS is aimed at this multiple of the RRS: the middle of the 0.9-1.3 band in logarithm
+AIM = math.sqrt(0.9 * 1.3)
+#: ... tending to this multiple at the top of the checked range (see match)
+TOP_AIM = 1.0
+#: the peaks are never cut below this multiple of the RRS at the top of the range
+PEAK_FLOOR = 0.95
+#: iterations before the motion is declared not matched
+MAX_ITERATIONS = 40
+#: the loop stops once the TRS is this far inside the band, so that the file's rounding and the
+#: check read back from it cannot leave it
+MARGIN = 0.02
+#: digits of the acceleration (in g) in the files: the TRS checked is that of these values
+FILE_FORMAT = "%.9e"
+#: at most this fraction of the sampling frequency may be checked (a 33.3 Hz oscillator needs
+#: the motion's content around it, linear interpolation between samples costs little below it)
+MAX_CHECK_FRACTION = 0.25
+
+
+def envelope(t: np.ndarray, duration: float, strong: float) -> np.ndarray:
+    """Raised-cosine rise over (duration - strong) / 2, 1 over ``strong``, raised-cosine fall."""
+    ramp = 0.5 * (duration - strong)
+    e = np.ones_like(t)
+    if ramp > 0.0:
+        up = t < ramp
+        e[up] = np.sin(0.5 * np.pi * t[up] / ramp) ** 2
+        down = t > duration - ramp
+        e[down] = np.sin(0.5 * np.pi * (duration - t[down]) / ramp) ** 2
+    return e
+
+
+def default_strong(duration: float) -> float:
+    """Ramps of 5 s (a sixth of a shorter motion each): AC156's 20 s of strong motion in 30 s."""
+    return duration - 2.0 * min(5.0, duration / 6.0)
+
+
+def integrate(acc: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
+    """Velocity and displacement from rest of an acceleration linear between its samples (exact)."""
+    v = np.concatenate([[0.0], np.cumsum(0.5 * dt * (acc[:-1] + acc[1:]))])
+    d = np.concatenate([[0.0], np.cumsum(dt * v[:-1] + dt * dt * (acc[:-1] / 3.0 + acc[1:] / 6.0))])
+    return v, d
+
+
+def to_rest(acc: np.ndarray, dt: float, env: np.ndarray) -> np.ndarray:
+    """acc less e(t) (c0 + c1 tau + c2 tau^2 + c3 tau^3): final velocity and displacement zero,
+    the displacement history least squares within that."""
+    n = len(acc)
+    tau = np.arange(n) / (n - 1)
+    basis = np.array([env * tau**k for k in range(4)])
+    v0, d0 = integrate(acc, dt)
+    vb, db = zip(*(integrate(b, dt) for b in basis))
+    D = np.array(db).T  # (n, 4): the displacement of each basis function
+    C = np.array([[v[-1] for v in vb], [d[-1] for d in db]])
+    # c = c_p + N z: c_p meets the end conditions, N spans what keeps them; z minimises the drift
+    c_p = np.linalg.lstsq(C, np.array([v0[-1], d0[-1]]), rcond=None)[0]
+    null = np.linalg.svd(C)[2][2:].T
+    z = np.linalg.lstsq(D @ null, d0 - D @ c_p, rcond=None)[0]
+    return acc - (c_p + null @ z) @ basis
+
+
+def in_file_digits(acc_g: np.ndarray) -> np.ndarray:
+    """The values as the record file holds them (FILE_FORMAT), so that every check is of the file."""
+    return np.char.mod(FILE_FORMAT, acc_g).astype(float)
+
+
+def trs(acc: np.ndarray, dt: float, freqs: np.ndarray, damping: float) -> np.ndarray:
+    """sa (m/s2) at ``freqs`` of a record (m/s2) followed by rest, as ``rbhyst spectrum`` computes it."""
+    from rbhyst.solve.located import GROUND, SpectraSink, rest_samples
+
+    periods = np.sort(1.0 / np.asarray(freqs, float))
+    sink = SpectraSink([(GROUND, "x1")], [damping], periods, dt)
+    sink.update(acc[:, None])
+    sink.update(np.zeros((rest_samples(periods, [damping], dt), 1)))
+    sa = sink.result().spectrum.sa[:, 0, 0]
+    order = np.argsort(1.0 / np.asarray(freqs, float))
+    out = np.empty(len(sa))
+    out[order] = sa
+    return out
+
+
+@dataclass
+class Check:
+    """The TRS of one record against its RRS at the 1/6-octave frequencies of the check range."""
+
+    frequency_hz: np.ndarray
+    rrs: np.ndarray  # m/s2
+    trs: np.ndarray  # m/s2
+    band: tuple[float, float]
+
+    @property
+    def ratio(self) -> np.ndarray:
+        return self.trs / self.rrs
+
+    @property
+    def within(self) -> np.ndarray:
+        lo, hi = self.band
+        return (self.ratio >= lo) & (self.ratio <= hi)
+
+    @property
+    def ok(self) -> bool:
+        return bool(self.within.all())
+
+    def summary(self) -> dict:
+        r = self.ratio
+        i, j = int(np.argmin(r)), int(np.argmax(r))
+        return {"pass": self.ok, "band": list(self.band), "frequencies": int(len(r)),
+                "min_ratio": float(r[i]), "min_at_hz": float(self.frequency_hz[i]),
+                "max_ratio": float(r[j]), "max_at_hz": float(self.frequency_hz[j]),
+                "outside_hz": [float(f) for f in self.frequency_hz[~self.within]]}
+
+    def said(self) -> str:
+        s = self.summary()
+        return (f"{s['min_ratio']:.3f} ({s['min_at_hz']:.3g} Hz) to {s['max_ratio']:.3f} "
+                f"({s['max_at_hz']:.3g} Hz) times the RRS")
+
+
+def check_record(acc: np.ndarray, dt: float, rrs: RRS) -> Check:
+    f = sixth_octave(*rrs.check_range)
+    return Check(f, rrs(f), trs(acc, dt, f, rrs.damping), rrs.band)
+
+
+@dataclass
+class Record:
+    """One axis of one motion: the acceleration as written (g, FILE_FORMAT digits) and its check."""
+
+    axis: str
+    acc_g: np.ndarray
+    check: Check
+    iterations: int
+
+    def facts(self, dt: float, strong: float, rrs: RRS) -> dict:
+        acc = self.acc_g * G
+        v, d = integrate(acc, dt)
+        pga = float(np.max(np.abs(self.acc_g)))
+        return {"pga_g": pga, "pga_over_rrs_at_top": pga * G / float(rrs(rrs.check_range[1])),
+                "iterations": self.iterations,
+                "end_velocity_m_s": float(v[-1]), "end_displacement_m": float(d[-1]),
+                "peak_velocity_m_s": float(np.max(np.abs(v))), "peak_displacement_m": float(np.max(np.abs(d))),
+                "strong_motion_s": strong, "arias_5_95_s": arias_duration(acc, dt),
+                "trs": self.check.summary()}
+
+
+@dataclass
+class Motion:
+    """One motion: a record per axis (x1 horizontal, x2 vertical), sampled at ``dt``."""
+
+    number: int
+    seed: int
+    dt: float
+    duration: float
+    strong: float
+    records: dict[str, Record] = field(default_factory=dict)
+
+    @property
+    def time(self) -> np.ndarray:
+        n = len(next(iter(self.records.values())).acc_g)
+        return self.dt * np.arange(n)
+
+    @property
+    def correlation(self) -> float | None:
+        """Pearson's correlation coefficient of the two axes' accelerations (None with one axis)."""
+        if len(self.records) < 2:
+            return None
+        a, b = (r.acc_g for r in self.records.values())
+        return float(np.corrcoef(a, b)[0, 1])
+
+    @property
+    def ok(self) -> bool:
+        c = self.correlation
+        return all(r.check.ok for r in self.records.values()) and (c is None or abs(c) < MAX_CORRELATION)
+
+
+#: AC156: the components must be statistically independent, correlation coefficient below this
+MAX_CORRELATION = 0.3
+
+
+def arias_duration(acc: np.ndarray, dt: float) -> float:
+    """Time between 5 % and 95 % of the Arias intensity (the significant duration)."""
+    e = np.concatenate([[0.0], np.cumsum(0.5 * dt * (acc[:-1] ** 2 + acc[1:] ** 2))])
+    if e[-1] <= 0.0:
+        return 0.0
+    t = dt * np.arange(len(acc))
+    return float(np.interp(0.95 * e[-1], e, t) - np.interp(0.05 * e[-1], e, t))
+
+
+def motion_problems(rrs: dict[str, RRS], duration: float, dt: float, strong: float | None,
+                    standard: str | None, keys: dict[str, str]) -> list[str]:
+    """What is wrong with a request for motions, one line each, ``keys`` naming the options."""
+    problems = []
+    if not (dt > 0 and math.isfinite(dt)):
+        problems.append(f"{keys['dt']}: {dt:g} s must be positive")
+    if not (duration > 0 and math.isfinite(duration)):
+        problems.append(f"{keys['duration']}: {duration:g} s must be positive")
+    if problems:
+        return problems
+    if duration / dt > 2e6:
+        problems.append(f"{keys['duration']}, {keys['dt']}: {duration:g} s at {dt:g} s is {duration / dt:.3g} samples; "
+                        f"at most 2e6 (a coarser {keys['dt']} or a shorter {keys['duration']})")
+    top = max(r.check_range[1] for r in rrs.values())
+    if top > MAX_CHECK_FRACTION / dt:
+        problems.append(f"{keys['dt']}: {dt:g} s samples at {1 / dt:.4g} Hz, too coarse to carry the RRS up to "
+                        f"{top:.4g} Hz: {keys['dt']} {MAX_CHECK_FRACTION / top:.3g} would")
+    low = min(r.check_range[0] for r in rrs.values())
+    if duration < 8.0 / low:
+        problems.append(f"{keys['duration']}: {duration:g} s holds only {duration * low:.3g} cycles of the lowest "
+                        f"checked frequency ({low:.4g} Hz): at least {8.0 / low:.3g} s")
+    s = default_strong(duration) if strong is None else strong
+    if standard == "ac156" and (duration < AC156_DURATION or s < AC156_STRONG):
+        problems.append(f"{keys['duration']}: {duration:g} s: AC156 asks for {AC156_STRONG:g} s of strong motion "
+                        f"within at least {AC156_DURATION:g} s (ramps of 5 s): {keys['duration']} 30 or more")
+    return problems
+
+
+def make_motions(rrs: dict[str, RRS], count: int, duration: float, dt: float, seed: int,
+                 strong: float | None = None, progress=None) -> list[Motion]:
+    """``count`` motions, each a record per axis of ``rrs``, matched to it. An AnalysisError
+    (what would work said) when one cannot be matched."""
+    strong = default_strong(duration) if strong is None else strong
+    motions = []
+    for k in range(1, count + 1):
+        m = _matched_motion(rrs, k, duration, dt, seed, strong)
+        if not m.ok:
+            raise AnalysisError(_failure(m, rrs, duration, dt, seed, strong))
+        motions.append(m)
+        if progress is not None:
+            progress(k, count)
+    return motions
+
+
+def _matched_motion(rrs, number, duration, dt, seed, strong) -> Motion:
+    m = Motion(number, seed, dt, duration, strong)
+    for j, (axis, r) in enumerate(rrs.items(), start=1):
+        acc, iterations = match(r, duration, dt, strong, np.random.default_rng([seed, number, j]))
+        acc_g = in_file_digits(acc / G)
+        m.records[axis] = Record(axis, acc_g, check_record(acc_g * G, dt, r), iterations)
+    return m
+
+
+def _failure(m: Motion, rrs, duration, dt, seed, strong) -> str:
+    """Why motion ``m`` fails, and what would work: another seed tried here, or a longer motion."""
+    bad = [f"{axis}: its TRS lies from {r.check.said()}, outside {r.check.band[0]:g}-{r.check.band[1]:g}"
+           for axis, r in m.records.items() if not r.check.ok]
+    c = m.correlation
+    if c is not None and abs(c) >= MAX_CORRELATION:
+        bad.append(f"the axes' correlation coefficient is {c:.3f}, not below {MAX_CORRELATION:g}")
+    works = None
+    for other in range(seed + 1, seed + 4):
+        if _matched_motion(rrs, m.number, duration, dt, other, strong).ok:
+            works = f"--seed {other} meets it"
+            break
+    if works is None:
+        works = f"a longer --duration ({1.5 * duration:.3g} s) or a finer --dt ({dt / 2:g} s) may"
+    return f"motion {m.number} (seed {seed}) cannot be matched after {MAX_ITERATIONS} iterations: " \
+           f"{'; '.join(bad)}; {works}"
+
+
+def _taper(f: np.ndarray, f_low: float, f_high: float) -> np.ndarray:
+    """A smooth band-pass: 0 below f_low / 2, a raised cosine in log f up to f_low, 1 to f_high,
+    a raised cosine down to 0 at f_high x 1.25."""
+    out = np.ones_like(f)
+    with np.errstate(divide="ignore"):
+        lf = np.log2(np.where(f > 0, f, 1e-300) / f_low)
+    out[lf <= -1.0] = 0.0
+    rise = (lf > -1.0) & (lf < 0.0)
+    out[rise] = np.sin(0.5 * np.pi * (lf[rise] + 1.0)) ** 2
+    x = np.log2(np.where(f > 0, f, 1e-300) / f_high) / math.log2(1.25)
+    out[x >= 1.0] = 0.0
+    fall = (x > 0.0) & (x < 1.0)
+    out[fall] = np.cos(0.5 * np.pi * x[fall]) ** 2
+    return out
+
+
+def match(rrs: RRS, duration: float, dt: float, strong: float, rng) -> tuple[np.ndarray, int]:
+    """One record (m/s2) whose TRS lies within the RRS's band (as far as MAX_ITERATIONS take it)
+    and the iterations it took."""
+    n = int(round(duration / dt)) + 1
+    t = dt * np.arange(n)
+    env = envelope(t, duration, strong)
+    # the filtering below smears a little of the record onto its first and last samples: a
+    # half-second taper (where the envelope is below 3 %) brings them back to exactly zero
+    edges = envelope(t, duration, duration - 2.0 * min(0.5, 0.5 * (duration - strong)))
+    lo, hi = rrs.check_range
+    # zero padding: the corrections act as filters a few periods of the lowest frequency long,
+    # whose tails must not wrap around onto the record's other end
+    m = n + int(math.ceil(4.0 / (0.5 * lo) / dt))
+    f = np.fft.rfftfreq(m, dt)
+    top = min(hi * 1.25, 0.4 / dt)
+    checks = sixth_octave(lo, hi)
+    control = np.unique(np.concatenate([lo / 2.0 * 2.0 ** (np.arange(int(12 * math.log2(2 * top / lo)) + 1) / 12.0),
+                                        checks]))
+    # at the top of the range the TRS tends to the peak acceleration, which the content below
+    # sets as much as the content there: aimed lower there, it lands inside the band
+    aim = rrs(control) * np.exp(np.interp(np.log(control), np.log([hi / 4.0, hi]), [math.log(AIM), math.log(TOP_AIM)]))
+    is_check = np.isin(control, checks)
+    top_check = np.flatnonzero(is_check)[-1]
+    lf = np.log(np.maximum(f, 1e-6))
+    band = _taper(f, lo / 2.0, min(top * 1.2, 0.8 * 0.5 / dt))
+    amp = rrs(np.maximum(f, 1e-6)) * band
+    acc = to_rest(env * np.fft.irfft(np.fft.rfft(rng.standard_normal(m)) * amp, m)[:n], dt, env)
+    lo_ok, hi_ok = rrs.band[0] + MARGIN, rrs.band[1] - 3 * MARGIN
+    best, best_err, best_it = None, math.inf, 0
+    for it in range(MAX_ITERATIONS + 1):
+        sa = trs(acc, dt, control, rrs.damping)
+        ratio = sa / rrs(control)
+        r_check = ratio[is_check]
+        err = max(np.max(np.log(lo_ok / r_check)), np.max(np.log(r_check / hi_ok)))
+        if err < best_err:
+            best, best_err, best_it = acc, err, it
+        if err <= 0.0 or it == MAX_ITERATIONS:
+            break
+        # Fourier amplitudes times aim / TRS, interpolated on log frequency (flat beyond the
+        # control frequencies), at most doubled or halved at once, and band-limited again (the
+        # end-at-rest correction and the cut peaks below leave content outside the band)
+        correction = np.exp(np.interp(lf, np.log(control), np.log(aim / sa)))
+        acc = np.fft.irfft(np.fft.rfft(acc, m) * np.clip(correction, 0.5, 2.0) * band, m)[:n]
+        if ratio[top_check] > hi_ok:
+            # where the TRS at the top, the peak acceleration, is too high, the peaks are cut
+            # to what it should be (the next corrections restore the spectrum around them), but
+            # never below the RRS there: a rigid oscillator sees the peak acceleration itself
+            limit = max(np.max(np.abs(acc)) * TOP_AIM / ratio[top_check], PEAK_FLOOR * rrs(hi))
+            acc = np.clip(acc, -limit * env, limit * env)
+        acc = to_rest(acc * edges, dt, env)
+    return best, best_it
+
+
+# ---------------------------------------------------------------- files
+
+#: trs.csv's columns, one row per motion, axis and checked frequency
+TRS_COLUMNS = ("motion", "axis", "frequency_hz", "rrs_g", "trs_g", "ratio", "lower_g", "upper_g", "within")
+
+
+def record_text(motion: Motion, axis: str, mark: str) -> str:
+    """A record file as make-record writes one: its mark line, ``time_s,acceleration_g``, rows."""
+    import io
+
+    what = {"x1": "horizontal", "x2": "vertical"}[axis]
+    buf = io.StringIO()
+    np.savetxt(buf, np.column_stack([motion.time, motion.records[axis].acc_g]), delimiter=",", comments="",
+               fmt="%.6f," + FILE_FORMAT,
+               header=f"{mark}: motion {motion.number}, {axis} ({what})\ntime_s,acceleration_g")
+    return buf.getvalue()
+
+
+def record_name(motion: Motion, axis: str) -> str:
+    return f"m{motion.number}_{axis}.csv"
+
+
+def trs_rows(motions: list[Motion]) -> list[str]:
+    lines = [",".join(TRS_COLUMNS)]
+    for m in motions:
+        for axis, r in m.records.items():
+            c = r.check
+            lo, hi = c.band
+            for f, a, b, ok in zip(c.frequency_hz, c.rrs / G, c.trs / G, c.within):
+                lines.append(f"{m.number},{axis},{f:.6g},{a:.6g},{b:.6g},{b / a:.6g},{lo * a:.6g},{hi * a:.6g},"
+                             f"{'yes' if ok else 'no'}")
+    return lines
+
+
+def motions_summary(motions: list[Motion], rrs: dict[str, RRS], standard: str | None) -> dict:
+    """motions.json: the method, the RRS and, per motion and axis, what the record is."""
+    from rbhyst._version import __version__
+
+    return {
+        "rbhyst_version": __version__,
+        "method": "envelope-shaped band-limited Gaussian noise (PCG64), Fourier amplitudes iterated by "
+                  "aim / TRS at 1/12-octave control frequencies until the TRS lies within the band at every "
+                  "1/6-octave check frequency; corrected to end at rest (final velocity and displacement zero "
+                  "for the record linear between its samples)",
+        "aim": {"ratio": AIM, "at_top_of_range": TOP_AIM},
+        "standard": standard,
+        "rrs": {axis: r.describe() for axis, r in rrs.items()},
+        "motions": [{"number": m.number, "seed": m.seed, "dt_s": m.dt, "duration_s": m.duration,
+                     "strong_motion_s": m.strong, "correlation_x1_x2": m.correlation,
+                     "files": {axis: record_name(m, axis) for axis in m.records},
+                     "axes": {axis: r.facts(m.dt, m.strong, rrs[axis]) for axis, r in m.records.items()}}
+                    for m in motions],
+    }

@@ -1,0 +1,376 @@
+"""The verdict of a deck against a required response spectrum: ``rbhyst qualify``.
+
+The motions are made (spectrum-compatible, rbhyst.analyses.qualification.matching) or taken
+from the deck, their TRS checked, the deck run once per motion (x1 horizontal, x2 vertical) and
+every criterion the deck gives compared with its capacity: each element's stroke, the peak total
+acceleration at G and at each point of interest against the equipment's limit, each element's
+force against its capacity. The demand is the run's own figure (summary.json's peaks and
+strokes); over several motions it is the largest, or the mean from seven motions on (the rule of
+ASCE 7-10, 16.2.4, for response histories). A run whose error estimate exceeds
+``analysis.warn_error``, that is ``sensitive``, that has no estimate, or that warns, cannot vouch
+for its demands: the verdict is then a fail, whatever the margins.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from rbhyst.analyses.qualification import matching
+from rbhyst.analyses.qualification.rrs import G, RRS, requested_rrs
+from rbhyst.errors import InputError
+
+#: from this many motions on the demand is the mean over them, below it the largest (ASCE 7-10 16.2.4)
+MEAN_FROM = 7
+_SPECTRUM_KEYS = ("standard", "sds", "z_over_h", "rrs", "rrs_x2", "rrs_damping")
+
+
+@dataclass
+class Request:
+    """What to qualify against, resolved from the deck's [qualify] and the command line."""
+
+    rrs: dict[str, RRS]
+    standard: str | None
+    motions: int | str
+    seed: int
+    duration: float
+    motion_dt: float
+    acceleration_limit_g: dict
+    force_capacity_N: float | dict | None
+
+
+def request(deck, cli: dict) -> Request:
+    """The request: the command line's values (``cli``, None where not given) over the deck's
+    [qualify]; a --standard or --rrs there replaces the deck's spectrum. Problems name the option
+    or the deck key they come from, all at once."""
+    given = deck.qualify.model_dump(exclude_unset=True) if deck.qualify is not None else {}
+    cli = {k: v for k, v in cli.items() if v is not None}
+    for k in ("rrs", "rrs_x2"):  # files named on the command line are where the command runs
+        if k in cli and cli[k].lower() not in ("ac156",):
+            cli[k] = str(Path(cli[k]).resolve())
+    if "standard" in cli or "rrs" in cli:
+        given = {k: v for k, v in given.items() if k not in _SPECTRUM_KEYS}
+    values = {**given, **cli}
+    option = {"standard": "--standard", "rrs": "--rrs", "rrs_x2": "--rrs-x2", "rrs_damping": "--rrs-damping",
+              "sds": "--sds", "z_over_h": "--z-over-h", "motions": "--motions", "duration": "--duration",
+              "motion_dt": "--motion-dt", "seed": "--seed"}
+    keys = {k: option[k] if k in cli else f"qualify.{k}" for k in option}
+    problems = []
+    if "standard" in values and "rrs" in values:
+        problems.append(f"{keys['rrs']}: not with {keys['standard']}: give a standard or RRS files")
+    if "standard" in cli and cli["standard"] not in ("ac156",):
+        problems.append(f"--standard: {cli['standard']!r}: ac156 (or RRS files with --rrs)")
+    if "standard" not in values and "rrs" not in values:
+        problems.append("qualify: no required response spectrum: --standard ac156 (with --sds and --z-over-h), "
+                        "--rrs FILE, or the same keys in the deck's [qualify]")
+    motions = values.get("motions", 1)
+    if isinstance(motions, str) and motions != "deck":
+        try:
+            motions = int(motions)
+        except ValueError:
+            problems.append(f"{keys['motions']}: {motions!r}: a number of motions to make, or deck")
+            motions = 1
+    if isinstance(motions, int) and motions < 1:
+        problems.append(f"{keys['motions']}: {motions}: at least 1")
+    rrs, standard = {}, None
+    if not problems:
+        spec_keys = {"rrs": keys["standard"] if "standard" in values else keys["rrs"], "rrs_x2": keys["rrs_x2"],
+                     "damping": keys["rrs_damping"], "sds": keys["sds"], "z_over_h": keys["z_over_h"],
+                     "duration": keys["duration"], "dt": keys["motion_dt"]}
+        try:
+            rrs, standard = requested_rrs(values.get("standard", values.get("rrs")), values.get("rrs_x2"),
+                                          values.get("rrs_damping"), values.get("sds"), values.get("z_over_h"),
+                                          deck.base, spec_keys)
+        except InputError as err:
+            problems += err.problems
+        if rrs and motions != "deck":
+            problems += matching.motion_problems(rrs, values.get("duration", 30.0), values.get("motion_dt", 0.005),
+                                                 None, standard, spec_keys)
+    problems += _limit_problems(deck, values)
+    if deck.body is not None and deck.body.gravity is not None and abs(deck.body.gravity[0]) > abs(deck.body.gravity[1]):
+        problems.append("body.gravity: acts along x1, but qualification takes x1 as horizontal and x2 as vertical "
+                        "(the vertical spectrum drives x2)")
+    if problems:
+        raise InputError(problems)
+    return Request(rrs, standard, motions, int(values.get("seed", 1)), float(values.get("duration", 30.0)),
+                   float(values.get("motion_dt", 0.005)), values.get("acceleration_limit_g") or {},
+                   values.get("force_capacity_N"))
+
+
+def output_files(req: Request) -> list[str]:
+    """The files qualify writes (but the plot), to refuse a folder before the work."""
+    n = 1 if req.motions == "deck" else req.motions
+    files = ["qualification.json"] + [f"run_{k}/summary.json" for k in range(1, n + 1)]
+    if req.motions != "deck":
+        files += ["trs.csv", "motions.json"] + [f"motions/m{k}_{axis}.csv" for k in range(1, n + 1) for axis in req.rrs]
+    return files
+
+
+def _limit_problems(deck, values: dict) -> list[str]:
+    problems = []
+    names = [p.name for p in deck.output.points or []]
+    for name in values.get("acceleration_limit_g") or {}:
+        if name != "G" and name not in names:
+            problems.append(f"qualify.acceleration_limit_g.{name}: no point {name!r} in output.points "
+                            f"({', '.join(names + ['G (the mass centre)'])})")
+    caps = values.get("force_capacity_N")
+    n_el = sum(el.count for el in deck.elements or [])
+    if isinstance(caps, dict):
+        for name in caps:
+            if not (name.startswith("e") and name[1:].isdigit() and 1 <= int(name[1:]) <= n_el):
+                problems.append(f"qualify.force_capacity_N.{name}: not an element: e1 to e{n_el}, as in "
+                                "time_history.csv (count expanded)")
+    strokes = any(el.stroke is not None for el in deck.elements or [])
+    if not (strokes or values.get("acceleration_limit_g") or caps):
+        problems.append("qualify: nothing to hold the deck to: give elements a stroke, or "
+                        "qualify.acceleration_limit_g (per point, g) or qualify.force_capacity_N")
+    return problems
+
+
+# ---------------------------------------------------------------- the runs
+
+
+def _deck_with_motion(deck, support: dict | None, duration: float | None = None, notes: list | None = None):
+    """A copy of the deck driven by ``support`` (None: its own), whose analysis covers the
+    motion's ``duration`` (a shorter analysis.duration is lengthened, with a note)."""
+    from rbhyst.model.deck import parse_deck
+
+    data = deck.model_dump(mode="python", exclude_unset=True)
+    if support is not None:
+        ex = dict(data.get("excitation") or {})
+        ex["support"] = support
+        data["excitation"] = ex
+    own = data["analysis"].get("duration")
+    if duration is not None and own is not None and own < duration:
+        data["analysis"] = {**data["analysis"], "duration": duration}
+        if notes is not None and not notes:
+            notes.append(f"analysis.duration: {own:g} s is shorter than the motions ({duration:g} s): "
+                         "each run covers its whole motion")
+    copy = parse_deck(data)
+    copy._source = deck.source
+    return copy
+
+
+def _support(files: dict[str, Path]) -> dict:
+    return {axis: {"file": str(path), "units": "g"} for axis, path in files.items()}
+
+
+@dataclass
+class Verdict:
+    """What qualification.json holds."""
+
+    data: dict
+    criteria: list[dict]
+    checks: dict = field(default_factory=dict)  # axis -> [(label, Check)] for the plot
+    heading: tuple[str, ...] = ()  # what the plot says above the bars
+
+    @property
+    def passed(self) -> bool:
+        return bool(self.data["pass"])
+
+
+def qualify(deck, req: Request, folder: Path, integrator: str | None = None, dt: float | None = None,
+            tolerance: float | None = None, say=None) -> Verdict:
+    """Make or take the motions, run the deck on each, judge every criterion; write into ``folder``
+    (a staging folder): qualification.json, trs.csv, motions.json (with motions made), the
+    motions' records and run_<k>/summary.json (the plot is the caller's: report.qualification)."""
+    from rbhyst._version import __version__
+    from rbhyst.model.system import assemble
+    from rbhyst.results.analysis import run_deck
+    from rbhyst.results.writers import write_summary
+
+    folder = Path(folder).resolve()  # the runs' decks name the motions' files from their own folder
+    runs = []  # (label, summary dict)
+    notes: list[str] = []
+    motion_facts, checks = [], {axis: [] for axis in req.rrs}
+    trs_ok = True
+    if req.motions == "deck":
+        system = assemble(deck, deck.base)
+        duration = deck.analysis.duration or system.excitation.duration or 0.0
+        own = _deck_trs(system.excitation, duration, req.rrs)
+        for axis, c in own.items():
+            checks[axis].append(("TRS, the deck's motion", c))
+            trs_ok &= c.ok
+        motion_facts.append({"number": 1, "source": "the deck's excitation.support",
+                             "trs": {axis: c.summary() for axis, c in own.items()}})
+        decks = [("deck", _deck_with_motion(deck, None))]
+    else:
+        made = matching.make_motions(req.rrs, req.motions, req.duration, req.motion_dt, req.seed)
+        (folder / "motions").mkdir()
+        mark = f"# rbhyst qualify {deck.source.name if deck.source else 'deck'}"
+        decks = []
+        for m in made:
+            files = {}
+            for axis in m.records:
+                files[axis] = folder / "motions" / matching.record_name(m, axis)
+                files[axis].write_text(matching.record_text(m, axis, mark), encoding="utf-8")
+                checks[axis].append((f"TRS, motion {m.number}", m.records[axis].check))
+            decks.append((f"motion {m.number}", _deck_with_motion(deck, _support(files), m.duration, notes)))
+        trs_ok = all(m.ok for m in made)
+        (folder / "trs.csv").write_text("\n".join(matching.trs_rows(made)) + "\n", encoding="utf-8")
+        summary = matching.motions_summary(made, req.rrs, req.standard)
+        (folder / "motions.json").write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")
+        motion_facts = [{**m, "files": {a: f"motions/{f}" for a, f in m["files"].items()}} for m in summary["motions"]]
+    for k, (label, d) in enumerate(decks, start=1):
+        if say is not None:
+            say(f"running {label} ({k} of {len(decks)})")
+        result = run_deck(d, keep=False, integrator=integrator, dt=dt, tolerance=tolerance)
+        s = result.summary()
+        (folder / f"run_{k}").mkdir()
+        write_summary(result, folder / f"run_{k}" / "summary.json")  # as rbhyst run writes it
+        runs.append((label, s))
+    criteria = _criteria(deck, req, [s for _, s in runs])
+    accuracy = _accuracy(runs, deck.analysis.warn_error)
+    warnings = [f"{label}: {w}" for label, s in runs for w in s["warnings"]]
+    n = len(runs)
+    passed = trs_ok and accuracy["pass"] and not warnings and all(c["pass"] for c in criteria)
+    data = {
+        "rbhyst_version": __version__,
+        "deck": deck.source.name if deck.source else None,
+        "pass": passed,
+        "standard": req.standard,
+        "rrs": {axis: r.describe() for axis, r in req.rrs.items()},
+        "axes": {"x1": "horizontal", "x2": "vertical"},
+        "motions": motion_facts,
+        "statistic": (f"the mean over the {n} motions (seven or more: ASCE 7-10 16.2.4)" if n >= MEAN_FROM else
+                      f"the largest over the {n} motion{'s' * (n != 1)} (fewer than seven: ASCE 7-10 16.2.4)"),
+        "margin": "1 - demand / capacity: the share of the capacity left (negative: exceeded)",
+        "criteria": [{k: v for k, v in c.items() if k != "label"} for c in criteria],
+        "trs": {"pass": trs_ok, "band": {axis: list(r.band) for axis, r in req.rrs.items()},
+                "check_range_hz": {axis: list(r.check_range) for axis, r in req.rrs.items()},
+                "max_correlation": matching.MAX_CORRELATION},
+        "accuracy": accuracy,
+        "warnings": warnings,
+        "notes": notes,
+        "runs": [{"motion": label, "summary": f"run_{k}/summary.json"} for k, (label, _) in enumerate(runs, start=1)],
+    }
+    (folder / "qualification.json").write_text(json.dumps(data, indent=2) + "\n", encoding="utf-8")
+    est = accuracy["estimated_error"]
+    heading = (f"TRS within the band: {'yes' if trs_ok else 'no'}",
+               f"estimated error {'not given' if est is None else f'{100 * est:.2g} %'} "
+               f"(at most {100 * deck.analysis.warn_error:g} %)",
+               f"warnings: {len(warnings) or 'none'}", data["statistic"])
+    return Verdict(data, criteria, checks, heading)
+
+
+def _deck_trs(excitation, duration: float, rrs: dict[str, RRS]) -> dict:
+    """The TRS of the deck's own support motion per axis, from its signals (rbhyst.solve.ground)."""
+    from rbhyst.analyses.qualification.rrs import sixth_octave
+    from rbhyst.solve.ground import ground_spectra
+    from rbhyst.solve.located import rest_samples
+
+    out = {}
+    for axis, r in rrs.items():
+        signal = excitation.ag1 if axis == "x1" else excitation.ag2
+        f = sixth_octave(*r.check_range)
+        if signal is None:
+            out[axis] = matching.Check(f, r(f), np.zeros(len(f)), r.band)
+            continue
+        periods = np.sort(1.0 / f)
+        step = getattr(signal, "dt", periods[0] / 20.0)
+        t_end = max(duration, signal.end or duration) + rest_samples(periods, [r.damping], step) * step
+        sa = ground_spectra(type(excitation)(**{("ag1" if axis == "x1" else "ag2"): signal}), t_end, [r.damping],
+                            periods).spectrum.sa[:, 0, 0]
+        out[axis] = matching.Check(f, r(f), sa[np.argsort(np.argsort(1.0 / f))], r.band)
+    return out
+
+
+def _statistic(values: list[float]) -> float:
+    return float(np.mean(values)) if len(values) >= MEAN_FROM else float(np.max(values))
+
+
+def _criterion(kind: str, item: str, unit: str, per_run: list[float], capacity: float, label: str, **extra) -> dict:
+    demand = _statistic(per_run)
+    return {"criterion": kind, "item": item, "unit": unit, "demand": demand, "capacity": capacity,
+            "margin": 1.0 - demand / capacity, "pass": bool(demand <= capacity), "per_motion": per_run,
+            **extra, "label": label}
+
+
+def _criteria(deck, req: Request, summaries: list[dict]) -> list[dict]:
+    """Every criterion's demand (from each run's summary), capacity, margin and pass."""
+    out = []
+    first = 1
+    for i, el in enumerate(deck.elements, start=1):
+        span = f"e{first}" if el.count == 1 else f"e{first}-e{first + el.count - 1}"
+        if el.stroke is not None:
+            strokes = [s["elements"][i - 1]["stroke"] for s in summaries]
+            use = [st["utilization"] for st in strokes]
+            # the capacity is the limit on the side where the worst motion reached it; a motion
+            # that peaked on the other side counts by its utilization of its own side
+            k = int(np.argmax(use))
+            up = strokes[k]["peak_deformation_m"] >= 0
+            lo, hi = strokes[k]["limits_m"]
+            capacity = hi if up else -lo
+            peaks = [abs(st["peak_deformation_m"]) if (st["peak_deformation_m"] >= 0) == up else u * capacity
+                     for st, u in zip(strokes, use)]
+            out.append(_criterion("stroke", f"elements[{i}] ({span})", "m", peaks, capacity,
+                                  f"stroke elements[{i}] ({span})",
+                                  utilization=[float(u) for u in use], column=f"e{first}_u_m"))
+        first += el.count
+    for name, limit in (req.acceleration_limit_g or {}).items():
+        limits = limit if isinstance(limit, list) else [limit, limit]
+        for j, direction in enumerate(("x1", "x2")):
+            column = f"at{j + 1}_m_s2" if name == "G" else f"{name}_at{j + 1}_m_s2"
+            per_run = [s["peaks"][column] / G for s in summaries]
+            out.append(_criterion("acceleration", f"{name} {direction}", "g", per_run, float(limits[j]),
+                                  f"acceleration {name} {direction}", column=column))
+    caps = req.force_capacity_N
+    if caps is not None:
+        n_el = sum(el.count for el in deck.elements)
+        named = caps if isinstance(caps, dict) else {f"e{k}": caps for k in range(1, n_el + 1)}
+        for name in sorted(named, key=lambda e: int(e[1:])):
+            column = f"{name}_f_N"
+            per_run = [s["peaks"][column] for s in summaries]
+            out.append(_criterion("force", name, "N", per_run, float(named[name]), f"force {name}", column=column))
+    return out
+
+
+def _accuracy(runs: list[tuple[str, dict]], warn_error: float) -> dict:
+    """The worst estimated error over the runs and whether each can vouch for its figures."""
+    per, ok = [], True
+    for label, s in runs:
+        acc = s.get("accuracy") or {}
+        est = acc.get("estimated_error") or {}
+        if not est:
+            per.append({"motion": label, "estimated_error": None, "status": acc.get("status", "not estimated")})
+            ok = False
+            continue
+        name, worst = max(est.items(), key=lambda kv: kv[1])
+        good = worst <= warn_error and acc.get("status") != "sensitive"
+        ok &= good
+        per.append({"motion": label, "estimated_error": worst, "output": name, "status": acc.get("status"),
+                    "pass": good})
+    worst = max((p["estimated_error"] for p in per if p["estimated_error"] is not None), default=None)
+    return {"pass": ok, "estimated_error": worst, "warn_error": warn_error, "per_motion": per,
+            "rule": "every run's largest estimated error at most analysis.warn_error and not sensitive"}
+
+
+def verdict_lines(v: Verdict) -> list[str]:
+    """The console's account: each failed criterion, the least margin, and the verdict."""
+    d = v.data
+    lines = [f"note: {n}" for n in d["notes"]]
+    for c in v.criteria:
+        if not c["pass"]:
+            lines.append(f"fail: {c['label']}: {c['demand']:.4g} {c['unit']} > {c['capacity']:.4g} {c['unit']}")
+    if not d["trs"]["pass"]:
+        lines.append("fail: the motions' TRS is not within the RRS's band (trs.csv)")
+    acc = d["accuracy"]
+    if not acc["pass"]:
+        worst = acc["estimated_error"]
+        lines.append("fail: a run cannot vouch for its accuracy: " +
+                     ("no error estimate" if worst is None else
+                      f"estimated error {100 * worst:.2g} % (at most {100 * acc['warn_error']:g} %)") +
+                     "; a smaller --dt or --tolerance would")
+    for w in d["warnings"]:
+        lines.append(f"fail: warning: {w}")
+    least = min(v.criteria, key=lambda c: c["margin"]) if v.criteria else None
+    tail = f"; least margin {least['margin']:.3g} ({least['label']})" if least else ""
+    est = acc["estimated_error"]
+    lines.append(f"verdict: {'pass' if v.passed else 'fail'}: {len(v.criteria)} criteria, "
+                 f"{sum(c['pass'] for c in v.criteria)} within capacity{tail}; "
+                 f"estimated error {'not given' if est is None else f'{100 * est:.2g} %'}")
+    return lines

@@ -1,0 +1,375 @@
+"""Qualification: AC156's RRS at its breakpoints, spectrum-compatible motions read back by
+``rbhyst spectrum``, random vibration against its PSD, and the verdict against the runs' own
+summary.json."""
+
+from __future__ import annotations
+
+import copy
+import json
+import math
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from conftest import DECKS, invoke, snapshot, write_deck
+from rbhyst.analyses.qualification import matching
+from rbhyst.analyses.qualification.psd import load_psd, random_history, welch_check
+from rbhyst.analyses.qualification.rrs import ac156, ac156_levels, read_rrs, sixth_octave
+from rbhyst.errors import InputError
+from rbhyst.model.records import read_record
+
+G = 9.80665
+
+
+def errors(err: str) -> list[str]:
+    """The error lines (a first run may say first that it compiles the kernels)."""
+    return [line for line in err.splitlines() if not line.startswith("note: compiling")]
+
+
+# ---------------------------------------------------------------- the RRS
+
+
+@pytest.mark.parametrize("sds, zh, levels", [
+    (1.0, 1.0, (1.6, 1.2, 0.67, 0.27)),   # the roof: both horizontal levels at their caps
+    (1.0, 0.5, (1.6, 0.8, 0.67, 0.27)),   # A_FLX-H = 2 S_DS capped at 1.6 S_DS
+    (1.0, 0.0, (1.0, 0.4, 0.67, 0.27)),   # at grade
+    (1.5, 0.25, (2.25, 0.9, 1.005, 0.405)),
+])
+def test_ac156_levels_are_the_standards(sds, zh, levels):
+    got = ac156_levels(sds, zh)
+    assert [got[k] for k in ("AFLX-H", "ARIG-H", "AFLX-V", "ARIG-V")] == pytest.approx(levels, rel=1e-12)
+
+
+@pytest.mark.parametrize("axis, flx, rig", [("x1", 1.6, 1.2), ("x2", 0.67, 0.27)])
+def test_ac156_shape_at_its_breakpoints(axis, flx, rig):
+    r = ac156(1.0, 1.0)[axis]
+    sa = lambda f: float(r(f)) / G  # noqa: E731
+    assert r.damping == 0.05 and r.check_range == (1.3, 33.3) and r.band == (0.9, 1.3)
+    for f, want in ((1.3, flx), (3.0, flx), (8.3, flx), (33.3, rig), (50.0, rig), (100.0, rig)):
+        assert sa(f) == pytest.approx(want, rel=1e-12)
+    # straight on log-log axes from A_FLX at 8.3 Hz to A_RIG at 33.3 Hz: the geometric means meet
+    assert sa(math.sqrt(8.3 * 33.3)) == pytest.approx(math.sqrt(flx * rig), rel=1e-12)
+    # below 1.3 Hz the figure's line through A_FLX / 10 at 0.1 Hz: A_FLX (f / 1.3)^(ln 10 / ln 13)
+    for f in (0.1, 0.5, 1.0):
+        assert sa(f) == pytest.approx(flx * (f / 1.3) ** (math.log(10) / math.log(13)), rel=1e-12)
+
+
+def test_sixth_octave_points_cover_the_range():
+    f = sixth_octave(1.3, 33.3)
+    assert f[0] == 1.3 and f[-1] == 33.3 and len(f) == 30
+    assert np.allclose(np.diff(np.log2(f[:-1])), 1 / 6)
+
+
+def test_rrs_files_state_their_units(tmp_path):
+    good = tmp_path / "rrs.csv"
+    good.write_text("frequency_hz,sa_m_s2\n1.0,5.0\n10.0,10.0\n40.0,4.0\n")
+    r = read_rrs(good, 0.02)
+    assert r.check_range == (1.0, 40.0) and r.damping == 0.02 and float(r(10.0)) == pytest.approx(10.0, rel=1e-15)
+    bare = tmp_path / "bare.csv"
+    bare.write_text("f,sa\n1.0,0.5\n10.0,1.0\n")
+    with pytest.raises(InputError) as err:
+        read_rrs(bare, 0.05)
+    assert err.value.problems == [f"{bare}:1: the header must state the value's unit, as record files do: "
+                                  "frequency_hz,sa_g (or sa_m_s2, sa [g], ...)"]
+    down = tmp_path / "down.csv"
+    down.write_text("frequency_hz,sa_g\n1.0,0.5\n10.0,1.0\n5.0,1.0\n")
+    with pytest.raises(InputError) as err:
+        read_rrs(down, None)
+    assert err.value.problems == [f"{down}:4: the frequency 5 Hz does not increase (previous 10 Hz)"]
+
+
+# ---------------------------------------------------------------- make-motion
+
+
+AC156_OPTIONS = ("--rrs", "ac156", "--sds", "1.0", "--z-over-h", "0.5", "--duration", "30", "--seed", "3")
+
+
+@pytest.fixture(scope="module")
+def motion(tmp_path_factory):
+    out = tmp_path_factory.mktemp("motion") / "ac156"
+    code, err = invoke("make-motion", out, *AC156_OPTIONS)
+    assert code == 0, err
+    return out
+
+
+def _acc_g(path: Path) -> tuple[float, np.ndarray]:
+    s = read_record(path).series
+    return s.dt, s.values
+
+
+def test_the_trs_read_back_by_rbhyst_spectrum_lies_within_the_band(motion, tmp_path):
+    rrs = ac156(1.0, 0.5)
+    f = sixth_octave(1.3, 33.3)
+    trs_csv = np.genfromtxt(motion / "trs.csv", delimiter=",", names=True, dtype=None, encoding="utf-8")
+    for axis in ("x1", "x2"):
+        code, err = invoke("spectrum", motion / f"m1_{axis}.csv", "--units", "g", "--damping", "0.05",
+                           "--periods", ",".join(repr(float(1 / x)) for x in f), "--out", tmp_path / axis, "--no-plots")
+        assert code == 0, err
+        rows = np.genfromtxt(tmp_path / axis / "spectra.csv", delimiter=",", names=True, dtype=None, encoding="utf-8")
+        order = np.argsort(rows["frequency_hz"])
+        assert np.allclose(rows["frequency_hz"][order], f, rtol=1e-9)
+        sa = rows["sa_m_s2"][order]
+        ratio = sa / rrs[axis](f)
+        assert np.all(ratio >= 0.9) and np.all(ratio <= 1.3), ratio
+        mine = trs_csv[trs_csv["axis"] == axis]
+        assert np.allclose(mine["frequency_hz"], f, rtol=1e-5)
+        assert np.allclose(mine["trs_g"] * G, sa, rtol=1e-5)  # trs.csv is what rbhyst spectrum reads
+        assert set(mine["within"]) == {"yes"}
+
+
+def test_motions_end_at_rest_are_independent_and_strong_for_20_s(motion):
+    dt, x1 = _acc_g(motion / "m1_x1.csv")
+    _, x2 = _acc_g(motion / "m1_x2.csv")
+    assert dt == 0.005 and len(x1) == 6001 and x1[0] == 0.0 and x1[-1] == 0.0
+    for a in (x1, x2):
+        v, d = matching.integrate(a * G, dt)  # exact for a record linear between its samples
+        # to the rounding of the file's 10 digits (6e-8 of the peak displacement at most, on 60 motions)
+        assert abs(v[-1]) < 1e-6 * np.abs(v).max() and abs(d[-1]) < 1e-6 * np.abs(d).max()
+    assert abs(np.corrcoef(x1, x2)[0, 1]) < 0.3
+    facts = json.loads((motion / "motions.json").read_text())["motions"][0]
+    assert facts["duration_s"] == 30.0 and facts["strong_motion_s"] == 20.0
+    assert abs(facts["correlation_x1_x2"]) < 0.3
+    assert all(a["trs"]["pass"] for a in facts["axes"].values())
+
+
+def test_the_same_seed_gives_the_same_bits(motion, tmp_path):
+    code, err = invoke("make-motion", tmp_path / "again", *AC156_OPTIONS, "--no-plots")
+    assert code == 0, err
+    for name in ("m1_x1.csv", "m1_x2.csv", "trs.csv"):
+        assert (tmp_path / "again" / name).read_bytes() == (motion / name).read_bytes()
+    assert (motion / "trs.png").stat().st_size > 10_000
+
+
+def test_a_motion_that_cannot_be_matched_is_exit_3_with_what_would_work(tmp_path, monkeypatch):
+    monkeypatch.setattr(matching, "MAX_ITERATIONS", 0)
+    out = tmp_path / "none"
+    code, err = invoke("make-motion", out, *AC156_OPTIONS)
+    assert code == 3 and not out.exists()
+    lines = err.splitlines()
+    assert len(lines) == 1 and lines[0].startswith("error: motion 1 (seed 3) cannot be matched after 0 iterations: ")
+    assert "a longer --duration (45 s) or a finer --dt (0.0025 s) may" in lines[0]
+
+
+def test_make_motion_mistakes_are_one_line_each(tmp_path):
+    code, err = invoke("make-motion", tmp_path / "m", "--rrs", "ac156", "--sds", "-1", "--z-over-h", "1.5",
+                       "--duration", "20")
+    assert code == 2
+    assert err.splitlines() == ["error: --sds: -1 must be a positive number of g",
+                                "error: --z-over-h: 1.5 must be from 0 (grade) to 1 (roof): z is at most h"]
+    code, err = invoke("make-motion", tmp_path / "m", "--rrs", "ac156", "--sds", "1", "--z-over-h", "0.5",
+                       "--duration", "20")
+    assert code == 2 and err.splitlines() == [
+        "error: --duration: 20 s: AC156 asks for 20 s of strong motion within at least 30 s (ramps of 5 s): "
+        "--duration 30 or more"]
+    rrs = tmp_path / "rrs.csv"
+    rrs.write_text("frequency_hz,sa_g\n2,0.5\n20,1.0\n")
+    code, err = invoke("make-motion", tmp_path / "m", "--rrs", rrs, "--sds", "1")
+    assert code == 2 and err.splitlines() == [
+        "error: --sds: only with --rrs ac156",
+        "error: --rrs-damping: required with an RRS file: the damping ratio it is drawn for (0.05 for 5 %)"]
+    assert not (tmp_path / "m").exists()
+
+
+def test_a_user_rrs_is_matched_on_its_own_range(tmp_path):
+    rrs = tmp_path / "rrs.csv"
+    rrs.write_text("frequency_hz,sa [g]\n2.0,0.4\n5.0,1.0\n15.0,1.0\n30.0,0.5\n")
+    code, err = invoke("make-motion", tmp_path / "m", "--rrs", rrs, "--rrs-damping", "0.02", "--duration", "20",
+                       "--seed", "5", "--no-plots")
+    assert code == 0, err
+    assert sorted(p.name for p in (tmp_path / "m").iterdir()) == [".rbhyst.json", "m1_x1.csv", "motions.json",
+                                                                  "trs.csv"]
+    r = read_rrs(rrs, 0.02)
+    dt, a = _acc_g(tmp_path / "m" / "m1_x1.csv")
+    check = matching.check_record(a * G, dt, r)
+    assert check.ok and check.frequency_hz[0] == 2.0 and check.frequency_hz[-1] == 30.0
+
+
+# ---------------------------------------------------------------- random vibration
+
+#: a MIL-STD-810-style table: +6 dB/octave, a plateau, -6 dB/octave (g2/Hz)
+TABLE = [[10.0, 0.0025], [40.0, 0.04], [200.0, 0.04], [500.0, 0.0064]]
+
+
+def test_random_vibration_meets_its_psd_band_by_band_and_its_rms():
+    psd = load_psd(TABLE, "g2/Hz", Path("."))
+    dt, x = random_history(psd, 30.0, seed=11)
+    assert dt == pytest.approx(1 / 5000)
+    bands, rms, target = welch_check(x, dt, psd)
+    assert [(b.f_lo, b.f_hi) for b in bands] == [(10.0, 40.0), (40.0, 200.0), (200.0, 500.0)]
+    assert all(b.bins >= 8 and abs(b.db) <= 3.0 for b in bands), [(b.bins, b.db) for b in bands]
+    # the exact integral of the table: 0.0025 * 10 / 3 (4^3 - 1) + 0.04 * 160 + 0.04 * 200 (1 - 0.4)
+    assert target / G == pytest.approx(math.sqrt(0.0025 * 10 / 3 * 63 + 6.4 + 8.0 * 0.6), rel=1e-12)
+    assert abs(rms / target - 1.0) < 0.02
+    # Gaussian and stationary: kurtosis 3, and the same rms in each third of the history
+    z = (x - x.mean()) / x.std()
+    assert abs(np.mean(z**4) - 3.0) < 0.1 and abs(np.mean(z**3)) < 0.05
+    thirds = [np.sqrt(np.mean(p**2)) / rms for p in np.array_split(x, 3)]
+    assert np.allclose(thirds, 1.0, atol=0.03)
+
+
+def test_random_vibration_is_the_same_bits_for_the_same_seed():
+    psd = load_psd(TABLE, "g2/Hz", Path("."))
+    a = random_history(psd, 5.0, seed=4)[1]
+    assert a.tobytes() == random_history(psd, 5.0, seed=4)[1].tobytes()
+    assert a.tobytes() != random_history(psd, 5.0, seed=5)[1].tobytes()
+
+
+def _random_deck(tmp_path, support: dict, **analysis) -> Path:
+    cab = tomllib.loads((DECKS / "cabinet_transformer.toml").read_text())
+    cab["excitation"] = {"support": support}
+    cab["analysis"] = {"dt": 0.001, **analysis}
+    cab["output"] = {"plots": False}
+    return write_deck(tmp_path, cab)
+
+
+def test_random_vibration_drives_every_integrator(tmp_path):
+    import rbhyst
+
+    psd = [[5.0, 0.001], [20.0, 0.004], [60.0, 0.004], [100.0, 0.001]]
+    deck = rbhyst.load_deck(_random_deck(tmp_path, {
+        "x1": {"type": "random", "psd": psd, "units": "g2/Hz", "duration": 4.0, "seed": 2},
+        "x2": {"type": "random", "psd": psd, "units": "g2/Hz", "duration": 4.0, "seed": 3, "scale": 0.5}}))
+    chang = rbhyst.run(deck, estimate=False)
+    adaptive = rbhyst.run(deck, integrator="adaptive", estimate=False)
+    dt, x = random_history(load_psd(psd, "g2/Hz", Path(".")), 4.0, seed=2)
+    # the run's support acceleration is the history, linear between its samples, zero after it
+    assert np.allclose(chang.column("ag1_m_s2"), np.interp(chang.time, dt * np.arange(len(x)), x, right=0.0),
+                       rtol=0, atol=1e-12 * np.abs(x).max())
+    for col in ("u1_m", "u2_m", "at1_m_s2"):
+        assert chang.extremes.peak(col) == pytest.approx(adaptive.extremes.peak(col), rel=0.02)
+
+
+def test_random_vibration_mistakes_name_their_place(tmp_path):
+    psd_file = tmp_path / "psd.csv"
+    psd_file.write_text("frequency_hz,psd [(m/s2)2/Hz]\n20,0.1\n80,0.4\n")
+    deck = _random_deck(tmp_path, {
+        "x1": {"type": "random", "psd": [[20.0, 0.01], [10.0, 0.04]], "units": "g2/Hz", "duration": 4.0, "seed": 2},
+        "x2": {"type": "random", "psd": "psd.csv", "units": "g2/Hz", "duration": 4.0, "seed": 2}})
+    code, err = invoke("run", deck, "--out", tmp_path / "out")
+    assert code == 2 and errors(err) == [
+        "error: excitation.support.x1.psd[2]: the frequency 10 Hz does not increase (the breakpoint before is at 20 Hz)"]
+    deck = _random_deck(tmp_path, {
+        "x1": {"type": "random", "psd": [[20.0, 0.01], [80.0, 0.04]], "units": "g2/Hz", "duration": 4.0, "seed": 2,
+               "dt": 0.01},
+        "x2": {"type": "random", "psd": "psd.csv", "units": "g2/Hz", "duration": 4.0, "seed": 2}})
+    code, err = invoke("run", deck, "--out", tmp_path / "out")
+    assert code == 2 and errors(err) == [
+        "error: excitation.support.x1: dt: 0.01 s samples at 100 Hz, too coarse for the PSD's 80 Hz: at most "
+        "0.005 s (2.5 samples a period), 0.00125 s by default",
+        f"error: excitation.support.x2: {psd_file}:1: the header declares 'psd [(m/s2)2/Hz]' ((m/s2)2/Hz) but the deck "
+        'says units = "g2/Hz"']
+    assert not (tmp_path / "out").exists()
+
+
+# ---------------------------------------------------------------- the verdict
+
+
+def _cabinet(tmp_path, qualify: dict | None = None, **changes) -> Path:
+    """The sample cabinet with strokes on its isolators, a point at its top and a [qualify]."""
+    cab = tomllib.loads((DECKS / "cabinet_transformer.toml").read_text())
+    for el in cab["elements"]:
+        el["stroke"] = 0.05
+    for sig in cab["excitation"]["support"].values():
+        sig["file"] = str(DECKS / sig["file"])
+    cab["output"] = {"points": [{"name": "top", "point": [0.0, 2.0]}]}
+    cab["qualify"] = qualify if qualify is not None else {
+        "standard": "ac156", "sds": 1.0, "z_over_h": 0.5, "seed": 2,
+        "acceleration_limit_g": {"top": 3.0, "G": [2.0, 1.5]}, "force_capacity_N": {"e1": 20000.0, "e5": 20000.0}}
+    for key, value in changes.items():
+        cab[key] = value
+    return write_deck(tmp_path, cab)
+
+
+def test_the_verdict_takes_its_demands_from_the_runs_summary(tmp_path):
+    import rbhyst
+
+    deck = DECKS / "cabinet_qualify.toml"  # the sample: strokes, a point at the top, [qualify]
+    out = tmp_path / "q"
+    code, err = invoke("qualify", deck, "--out", out, "--motions", "2", "--seed", "2")
+    assert code == 0, err
+    assert err.splitlines()[-2].startswith("verdict: pass: 16 criteria, 16 within capacity; least margin ")
+    q = json.loads((out / "qualification.json").read_text())
+    assert q["pass"] and q["trs"]["pass"] and q["accuracy"]["pass"] and q["warnings"] == []
+    assert q["statistic"] == "the largest over the 2 motions (fewer than seven: ASCE 7-10 16.2.4)"
+    summaries = [json.loads((out / f"run_{k}" / "summary.json").read_text()) for k in (1, 2)]
+    kinds = [c["criterion"] for c in q["criteria"]]
+    assert kinds == ["stroke"] * 4 + ["acceleration"] * 4 + ["force"] * 8
+    for c in q["criteria"]:
+        if c["criterion"] == "stroke":
+            i = int(c["item"].split("[")[1].split("]")[0]) - 1
+            per = [abs(s["elements"][i]["stroke"]["peak_deformation_m"]) for s in summaries]
+        elif c["criterion"] == "acceleration":
+            per = [s["peaks"][c["column"]] / G for s in summaries]
+        else:
+            per = [s["peaks"][c["column"]] for s in summaries]
+        assert c["per_motion"] == per and c["demand"] == max(per)
+        assert c["margin"] == 1 - c["demand"] / c["capacity"] and c["pass"] == (c["demand"] <= c["capacity"])
+    # the same motions through rbhyst.run give the same figures, to the bit
+    cab = rbhyst.load_deck(deck)
+    for k, s in enumerate(summaries, start=1):
+        support = {axis: {"file": str(out / "motions" / f"m{k}_{axis}.csv"), "units": "g"} for axis in ("x1", "x2")}
+        again = rbhyst.run(cab.with_values({"excitation.support": support})).summary()
+        assert again["peaks"] == s["peaks"] and again["elements"] == s["elements"]
+    assert {p.name for p in out.iterdir()} == {".rbhyst.json", "motions", "run_1", "run_2", "trs.csv", "motions.json",
+                                                "qualification.json", "qualification.png"}
+
+
+def test_a_demand_beyond_its_capacity_fails_with_exit_1(tmp_path):
+    deck = _cabinet(tmp_path, {"standard": "ac156", "sds": 1.0, "z_over_h": 0.5, "seed": 2,
+                               "acceleration_limit_g": {"top": 1.0}})
+    code, err = invoke("qualify", deck, "--out", tmp_path / "q", "--no-plots")
+    assert code == 1
+    lines = err.splitlines()
+    assert any(line.startswith("fail: acceleration top x1: ") and line.endswith(" g > 1 g") for line in lines)
+    assert lines[-2].startswith("verdict: fail: ")
+    q = json.loads((tmp_path / "q" / "qualification.json").read_text())
+    assert not q["pass"] and not (tmp_path / "q" / "qualification.png").exists()
+
+
+def test_a_run_that_cannot_vouch_for_its_accuracy_cannot_pass(tmp_path):
+    deck = _cabinet(tmp_path, analysis={"dt": 0.004})
+    code, err = invoke("qualify", deck, "--out", tmp_path / "q", "--no-plots")
+    q = json.loads((tmp_path / "q" / "qualification.json").read_text())
+    assert code == 1 and not q["pass"] and not q["accuracy"]["pass"]
+    assert all(c["pass"] for c in q["criteria"])  # every margin fine, and still no pass
+    assert q["accuracy"]["estimated_error"] > q["accuracy"]["warn_error"] and q["warnings"]
+    assert any(line.startswith("fail: a run cannot vouch for its accuracy: estimated error ") for line in err.splitlines())
+
+
+def test_the_decks_own_motion_is_checked_against_the_rrs(tmp_path):
+    deck = _cabinet(tmp_path)
+    code, err = invoke("qualify", deck, "--out", tmp_path / "q", "--motions", "deck", "--no-plots")
+    q = json.loads((tmp_path / "q" / "qualification.json").read_text())
+    # the sample's synthetic records are no AC156 motion at 1 g: their TRS lies far below
+    assert code == 1 and not q["trs"]["pass"] and q["motions"][0]["trs"]["x1"]["max_ratio"] < 0.9
+    assert "fail: the motions' TRS is not within the RRS's band (trs.csv)" in err.splitlines()
+
+
+def test_qualify_mistakes_are_one_line_each_and_nothing_is_written(tmp_path):
+    deck = _cabinet(tmp_path, {"standard": "ac156", "sds": 1.0, "acceleration_limit_g": {"roof": 2.0},
+                               "force_capacity_N": {"e9": 1.0}})
+    out = tmp_path / "q"
+    out.mkdir()
+    (out / "qualification.json").write_text("mine")
+    before = snapshot(out)
+    code, err = invoke("qualify", deck, "--out", out)
+    assert code == 2 and err.splitlines() == [
+        "error: qualify.z_over_h: required with the AC156 spectrum (z/h, the attachment height over the roof "
+        "height, 0 at grade to 1 at the roof)",
+        "error: qualify.acceleration_limit_g.roof: no point 'roof' in output.points (top, G (the mass centre))",
+        "error: qualify.force_capacity_N.e9: not an element: e1 to e8, as in time_history.csv (count expanded)"]
+    code, err = invoke("qualify", deck, "--out", out, "--z-over-h", "0.5", "--motions", "0")
+    assert code == 2 and "error: --motions: 0: at least 1" in err.splitlines()
+    code, err = invoke("qualify", _cabinet(tmp_path, {"standard": "ac156", "sds": 1.0, "z_over_h": 0.5,
+                                                      "acceleration_limit_g": {"top": 2.0}}), "--out", out)
+    assert code == 2 and err.splitlines() == [
+        f"error: {out}: qualification.json exists and rbhyst did not write it (not listed in .rbhyst.json); rbhyst "
+        "will not overwrite it: move it away or choose another output folder"]
+    assert snapshot(out) == before
+    cab = tomllib.loads((DECKS / "cabinet_transformer.toml").read_text())
+    cab["qualify"] = {"standard": "ac156", "rrs": "x.csv"}
+    code, err = invoke("qualify", write_deck(tmp_path, cab, name="both"))
+    assert code == 2 and err.splitlines() == [
+        "error: qualify.rrs: not with qualify.standard: give a standard or RRS files"]
