@@ -594,6 +594,12 @@ KEY_UNITS: dict[tuple[str, ...], str] = {
     ("output", "spectra", "periods_s"): "s", ("output", "points", "point"): "m",
     ("loops", "amplitude"): "m", ("loops", "frequency_hz"): "Hz", ("loops", "cycles"): "",
     ("loops", "points_per_cycle"): "",
+    ("damping", "rayleigh", "ratio"): "", ("damping", "rayleigh", "frequencies_hz"): "Hz",
+    ("damping", "rayleigh", "modes"): "",
+    ("qualify", "sds"): "g", ("qualify", "z_over_h"): "", ("qualify", "rrs_damping"): "", ("qualify", "motions"): "",
+    ("qualify", "seed"): "", ("qualify", "duration"): "s", ("qualify", "motion_dt"): "s",
+    ("qualify", "acceleration_limit_g", "*"): "g", ("qualify", "force_capacity_N"): "N",
+    ("qualify", "force_capacity_N", "*"): "N",
 }
 #: units as written in a deck, as an axis shows them
 _SHOWN_UNITS = {"m/s2": "m/s²", "cm/s2": "cm/s²"}
