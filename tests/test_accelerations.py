@@ -128,6 +128,20 @@ def test_the_ground_spectrum_of_a_half_sine_is_the_pulse_s(tmp_path, dt):
     assert truth[0, 2] == pytest.approx(10 * G, rel=2e-3)  # the pulse's peak, at high frequency
 
 
+def test_a_direction_the_scene_does_not_move_in_cries_no_wolf(tmp_path):
+    """A pulse along x2 on a symmetric body leaves a corner's x1 spectrum at rounding noise
+    (1e-15 m/s2): its estimated error is measured against the body's largest spectrum, not
+    against the noise (it read 78 %, and the run warned)."""
+    data = pulse_deck("half-sine")
+    data["output"] = {"spectra": {"damping": [0.05], "periods_s": [0.01, 0.05, 0.2, 1.0]},
+                      "points": [{"name": "top", "point": [0.5, 0.5]}]}
+    res = rbhyst.run(write_deck(tmp_path, data))
+    assert np.max(res.spectra.sa("top", "x1")) < 1e-9 * np.max(res.spectra.sa("top", "x2"))
+    errors = res.accuracy["estimated_error"]
+    assert errors["sa_top_x1"] < 1e-3 and errors["sa_top_x2"] < 1e-2
+    assert res.warnings == []
+
+
 def test_the_ground_spectrum_of_a_record_is_the_record_s_at_any_dt(tmp_path):
     """A record is linear between its samples: its spectrum does not depend on the run's dt."""
     rng = np.random.default_rng(4)

@@ -469,3 +469,20 @@ def test_no_stroke_no_stroke_columns():
     assert element_table(summary) == ["elements (peaks over the run):",
                                       "  element  set  angle [deg]  peak |f| [N]  peak u [mm]",
                                       "  e1       m             45         602.2       -7.011"]
+
+
+def test_an_element_at_rest_gets_no_panel_of_rounding_noise(tmp_path):
+    """A pulse along x2 on a symmetric body leaves the x1 elements at 1e-13 N: their panels say
+    so instead of drawing noise as if it were a loop."""
+    import rbhyst
+    from conftest import write_deck
+    from test_accelerations import pulse_deck
+    from rbhyst.report.run import plot_element_loops
+
+    res = rbhyst.run(write_deck(tmp_path, pulse_deck("half-sine")), estimate=False)
+    fig = plot_element_loops(res, tmp_path / "loops.png")
+    axes = [ax for ax in fig.axes if ax.get_visible()]
+    drawn = [bool(ax.lines) for ax in axes]
+    said = [" ".join(t.get_text() for t in ax.texts) for ax in axes]
+    assert drawn == [True, True, False, False]
+    assert all(s.startswith("at rest: |f| at most ") for s in said[2:])

@@ -596,8 +596,8 @@ KEY_UNITS: dict[tuple[str, ...], str] = {
     ("loops", "points_per_cycle"): "",
     ("damping", "rayleigh", "ratio"): "", ("damping", "rayleigh", "frequencies_hz"): "Hz",
     ("damping", "rayleigh", "modes"): "",
-    ("qualify", "sds"): "g", ("qualify", "z_over_h"): "", ("qualify", "rrs_damping"): "", ("qualify", "motions"): "",
-    ("qualify", "seed"): "", ("qualify", "duration"): "s", ("qualify", "motion_dt"): "s",
+    ("qualify", "sds"): "g", ("qualify", "z_over_h"): "", ("qualify", "rrs_damping"): "",
+    ("qualify", "motions"): "", ("qualify", "seed"): "", ("qualify", "duration"): "s", ("qualify", "motion_dt"): "s",
     ("qualify", "acceleration_limit_g", "*"): "g", ("qualify", "force_capacity_N"): "N",
     ("qualify", "force_capacity_N", "*"): "N",
 }
