@@ -21,6 +21,7 @@ app = typer.Typer(
     add_completion=False,
     no_args_is_help=True,
     pretty_exceptions_enable=False,
+    rich_markup_mode=None,  # help texts hold units in brackets ("[s]"), not markup
     help="Nonlinear dynamics of 2D rigid bodies on Vaiana-Rosati hysteretic supports.",
 )
 
