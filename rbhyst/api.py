@@ -41,10 +41,12 @@ def run(deck: Deck | str | Path, integrator: str | None = None, dt: float | None
 
     d = deck_of(deck)
     system, settings = scene(d, integrator=integrator, dt=dt, tolerance=tolerance, estimate=estimate)
+    as_run = deck_as_run(d, integrator=integrator, dt=dt, tolerance=tolerance, estimate_error=estimate)
     progress = None if monitor is None else monitor.update
     if out is None:
         result = analyse(system, settings, keep=keep, progress=progress)
         result.writer = write
+        result.deck = as_run
         return result
     from rbhyst.files.outdir import staged_directory
     from rbhyst.results.writers import CsvWriter
@@ -58,12 +60,24 @@ def run(deck: Deck | str | Path, integrator: str | None = None, dt: float | None
         result = analyse(system, settings, keep=False, csv=functools.partial(CsvWriter, tmp / "time_history.csv"),
                          planned=planned, progress=progress)
         result.notes = early + result.notes
+        result.deck = as_run
         if progress is not None and draw:
             progress(0, 0, "drawing the figures")
         _write_rest(result, tmp, draw)
     result.csv_path = Path(out) / "time_history.csv"
     result.writer = write
     return result
+
+
+def deck_as_run(deck: Deck, **overrides) -> dict:
+    """The deck's keys as given, with the run's overrides (integrator, dt, tolerance,
+    estimate_error) in [analysis]: what summary.json keeps of the deck, so that a report can
+    show what ran."""
+    data = deck.model_dump(mode="json", exclude_unset=True)
+    given = {k: v for k, v in overrides.items() if v is not None}
+    if given:
+        data.setdefault("analysis", {}).update(given)
+    return data
 
 
 def write(result: Result, out: str | Path, plots: bool = True) -> Path:

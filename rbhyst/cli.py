@@ -21,6 +21,7 @@ app = typer.Typer(
     add_completion=False,
     no_args_is_help=True,
     pretty_exceptions_enable=False,
+    rich_markup_mode=None,  # help texts hold units in brackets ("[s]"), not markup
     help="Nonlinear dynamics of 2D rigid bodies on Vaiana-Rosati hysteretic supports.",
 )
 
@@ -69,6 +70,7 @@ def run(
     tolerance: Annotated[Optional[float], typer.Option(
         help="The accuracy asked for (relative error of u1, u2, theta3): rbhyst chooses how to meet it.")] = None,
     plots: Annotated[bool, typer.Option("--plots/--no-plots", help="Write PNG plots.")] = True,
+    report: Annotated[bool, typer.Option("--report", help="Also write report.html (see `rbhyst report`).")] = False,
 ):
     """Time-history analysis of the deck: time_history.csv, summary.json and PNG plots."""
     from rbhyst import api
@@ -82,8 +84,16 @@ def run(
         with user_errors():
             d = api.load_deck(deck, need=ANALYSIS_SECTIONS)
             target = out if out is not None else output_dir(d, deck)
+            if report:
+                from rbhyst.report.html import check_report_target
+
+                check_report_target(target)
             result = api.run(d, integrator=integrator, dt=dt, out=target, plots=plots and d.output.plots,
                              tolerance=tolerance, monitor=monitor)
+            if report:
+                from rbhyst.report.html import write_report
+
+                write_report(target)
     finally:
         monitor.close()
     for note in result.notes:  # after the run: a failing deck gets its error lines alone
@@ -370,6 +380,7 @@ def sweep(
     save_histories: Annotated[bool, typer.Option(
         "--save-histories", help="Every case's time history into histories.parquet (needs pyarrow).")] = False,
     plots: Annotated[bool, typer.Option("--plots/--no-plots", help="Write PNG plots.")] = True,
+    report: Annotated[bool, typer.Option("--report", help="Also write report.html (see `rbhyst report`).")] = False,
     tls_ca_file: Annotated[Optional[Path], typer.Option(
         "--tls-ca-file", help="With a tls:// --scheduler: the CA certificate (PEM) the scheduler's is signed by.")] = None,
     tls_cert: Annotated[Optional[Path], typer.Option(
@@ -393,6 +404,10 @@ def sweep(
     with user_errors():
         sw = load_sweep(sweep_file)
         target = out if out is not None else sw.default_out()
+        if report:
+            from rbhyst.report.html import check_report_target
+
+            check_report_target(target)
         from rbhyst.solve.kernels.compiled import ahead_of_time
         from rbhyst.solve.kernels.loop import run_chunk
 
@@ -446,6 +461,10 @@ def sweep(
                     "the same command computes the rest")
                 outdir.received.clear()
                 raise typer.Exit(128 + exc.signum) from None
+        if report:
+            from rbhyst.report.html import write_report
+
+            write_report(target)
     failed = outcome.failed
     took = outcome.t_end - outcome.t_start
     say(f"{outcome.ok} ok, {failed} failed; computed {outcome.computed}"
@@ -480,6 +499,21 @@ def _quiet_dask() -> None:
     for name in ("distributed", "tornado", "bokeh"):
         for handler in logging.getLogger(name).handlers:
             handler.setLevel(logging.CRITICAL + 1)
+
+
+@app.command(cls=Command)
+def report(
+    folder: Annotated[Path, typer.Argument(metavar="OUT_FOLDER", help="A folder rbhyst run or rbhyst sweep wrote.")],
+):
+    """One self-contained report.html of a run's or a sweep's results (figures embedded), to send and print.
+
+    It is added to the folder's files: the run's or the sweep's own stay as they are.
+    """
+    from rbhyst.report.html import write_report
+
+    with user_errors():
+        path = write_report(folder)
+    say(f"wrote {path}")
 
 
 @app.command(cls=Command)

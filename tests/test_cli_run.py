@@ -302,3 +302,13 @@ def test_a_run_without_an_estimate_says_so(tmp_path):
     assert code == 0, err
     assert "; error not estimated (analysis.estimate_error = false)" in err
     assert json.loads((tmp_path / "results" / "deck" / "summary.json").read_text())["accuracy"] is None
+
+
+def test_help_shows_units_in_brackets():
+    """Units written "[s]" in a help text are units, not markup to swallow."""
+    from typer.testing import CliRunner
+
+    from rbhyst.cli import app
+
+    res = CliRunner().invoke(app, ["run", "--help"])
+    assert res.exit_code == 0 and "Override analysis.dt [s]." in " ".join(res.stdout.split())

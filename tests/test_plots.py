@@ -306,6 +306,7 @@ def test_every_number_of_a_deck_has_a_unit():
                      "vertices": [[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]]}
     pulse["elements"][0]["stroke"] = [-0.01, 0.02]
     pulse["dampers"] = [{"point": [0.0, 0.0], "angle_deg": 10.0, "c": 5.0, "count": 2}]
+    pulse["damping"] = {"rayleigh": {"ratio": [0.02, 0.03], "frequencies_hz": [2.0, 8.0]}}
     pulse["output"] = {"every": 2, "points": [{"name": "a", "point": [0.0, 1.0]}],
                        "spectra": {"damping": [0.05], "periods_s": [0.1]}}
     decks.append(pulse)

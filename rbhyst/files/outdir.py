@@ -49,11 +49,12 @@ class Manifest:
 
 
 @contextmanager
-def staged_directory(target: Path):
+def staged_directory(target: Path, add: bool = False):
     """Yield a staging folder inside ``target``; on success its files move into ``target``.
 
     ``target`` (and its parents) is created if missing. Files an earlier rbhyst command
-    wrote there are replaced, or removed when not written again; a file that is in the way
+    wrote there are replaced, or removed when not written again (with ``add``, kept: the
+    files join those of the command before, as a report joins its run's); a file that is in the way
     and is not rbhyst's is an InputError naming the folder and the file, and nothing is
     moved. On any exception (KeyboardInterrupt included) the staging folder is removed,
     and so are the folders this call created: ``target`` is left exactly as it was.
@@ -79,7 +80,7 @@ def staged_directory(target: Path):
         files = _files_under(tmp)
         _check_in_the_way(target, files, owned)
         with signals_held():
-            _commit(target, tmp, files, owned)
+            _commit(target, tmp, files, owned, add)
             committed = True
             written.append(target)
     except BaseException as exc:
@@ -248,16 +249,21 @@ def _check_in_the_way(target: Path, files: list[str], owned: Manifest) -> None:
         raise InputError(sorted(set(problems)))
 
 
-def _commit(target: Path, tmp: Path, files: list[str], owned: Manifest) -> None:
+def _commit(target: Path, tmp: Path, files: list[str], owned: Manifest, add: bool = False) -> None:
     new_folders = sorted({d for rel in files for d in _parents(rel) if not (target / d).is_dir()})
     folders = (owned.folders & {d for rel in files for d in _parents(rel)}) | set(new_folders)
+    if add:  # the earlier files stay, and stay listed
+        folders |= owned.folders
+        files_after = set(files) | owned.files
+    else:
+        files_after = set(files)
     # first list both the old files and the new: a crash part-way leaves every file of ours named
     _write_manifest(target, tmp, Manifest(owned.files | set(files), owned.folders | folders))
     for d in new_folders:
         (target / d).mkdir(exist_ok=True)
     for rel in files:
         os.replace(tmp / rel, target / rel)
-    for rel in sorted(owned.files - set(files)):
+    for rel in sorted(owned.files - files_after):
         p = target / rel
         if p.is_symlink() or p.is_file():
             p.unlink()
@@ -267,7 +273,7 @@ def _commit(target: Path, tmp: Path, files: list[str], owned: Manifest) -> None:
         except OSError:
             pass
     try:
-        _write_manifest(target, tmp, Manifest(set(files), folders))
+        _write_manifest(target, tmp, Manifest(files_after, folders))
     except OSError as exc:
         if not is_disk_full(exc):
             raise

@@ -204,6 +204,38 @@ class Damper(_Placed):
     c: Annotated[float, Field(ge=0)]  # N s/m
 
 
+class Rayleigh(_Model):
+    """C = a0 M + a1 K0 (K0 the initial system's stiffness, as summary.json's k0): the damping
+    ``ratio`` at two frequencies, given in Hz or as two modes of (M, K0) counted from 1."""
+
+    ratio: Annotated[float, Field(gt=0, lt=1)] | Annotated[list[Annotated[float, Field(gt=0, lt=1)]],
+                                                           Field(min_length=2, max_length=2)]
+    frequencies_hz: Annotated[list[PosFloat], Field(min_length=2, max_length=2)] | None = None
+    modes: Annotated[list[Annotated[int, Field(ge=1, le=3)]], Field(min_length=2, max_length=2)] | None = None
+
+    @model_validator(mode="after")
+    def _two_points(self):
+        given = [k for k in ("frequencies_hz", "modes") if getattr(self, k) is not None]
+        if len(given) != 1:
+            raise ValueError("give exactly one of `frequencies_hz` ([f1, f2] in Hz) or `modes` ([i, j], "
+                             "the initial system's modes counted from 1)")
+        pair = getattr(self, given[0])
+        if pair[0] == pair[1]:
+            raise _key_problems([(given[0], f"{pair}: two different {'frequencies' if given[0][0] == 'f' else 'modes'}"
+                                            " (one point does not fix a0 and a1)")])
+        return self
+
+    @property
+    def ratios(self) -> tuple[float, float]:
+        return tuple(self.ratio) if isinstance(self.ratio, list) else (self.ratio, self.ratio)
+
+
+class Damping(_Model):
+    """Damping beyond the elements' hysteresis and the dampers: Rayleigh's, optionally."""
+
+    rayleigh: Rayleigh | None = None
+
+
 # ---------------------------------------------------------------- excitation
 
 
@@ -475,6 +507,7 @@ class Deck(_Model):
     hysteresis: Annotated[dict[str, HysteresisSet], Field(min_length=1)]
     elements: Annotated[list[Element], Field(min_length=1)] | None = None
     dampers: list[Damper] | None = None
+    damping: Damping | None = None
     excitation: Excitation | None = None
     analysis: Analysis | None = None
     output: Output = Output()
@@ -561,6 +594,8 @@ KEY_UNITS: dict[tuple[str, ...], str] = {
     ("output", "spectra", "periods_s"): "s", ("output", "points", "point"): "m",
     ("loops", "amplitude"): "m", ("loops", "frequency_hz"): "Hz", ("loops", "cycles"): "",
     ("loops", "points_per_cycle"): "",
+    ("damping", "rayleigh", "ratio"): "", ("damping", "rayleigh", "frequencies_hz"): "Hz",
+    ("damping", "rayleigh", "modes"): "",
     ("qualify", "sds"): "g", ("qualify", "z_over_h"): "", ("qualify", "rrs_damping"): "",
     ("qualify", "motions"): "", ("qualify", "seed"): "", ("qualify", "duration"): "s", ("qualify", "motion_dt"): "s",
     ("qualify", "acceleration_limit_g", "*"): "g", ("qualify", "force_capacity_N"): "N",

@@ -240,6 +240,66 @@ class Damper:
 
 
 @dataclass(frozen=True)
+class RayleighDamping:
+    """C = a0 M + a1 K0 from the damping ratios at two circular frequencies of the initial system."""
+
+    a0: float  # 1/s
+    a1: float  # s
+    frequencies_hz: tuple[float, float]  # where the ratios are met
+    ratios: tuple[float, float]
+    modes: tuple[int, int] | None  # the modes those are, when the deck named modes
+    mode_frequencies_hz: tuple[float, ...]  # every mode of (M, K0), ascending
+    matrix: np.ndarray  # (n, n)
+
+    def ratio_at(self, f_hz) -> np.ndarray:
+        """zeta(omega) = a0 / (2 omega) + a1 omega / 2."""
+        w = 2.0 * np.pi * np.asarray(f_hz, dtype=float)
+        return self.a0 / (2.0 * w) + self.a1 * w / 2.0
+
+    def summary(self) -> dict:
+        return {"a0_1_s": self.a0, "a1_s": self.a1, "frequencies_hz": list(self.frequencies_hz),
+                "ratios": list(self.ratios), **({"modes": list(self.modes)} if self.modes else {}),
+                "mode_frequencies_hz": list(self.mode_frequencies_hz),
+                "mode_ratios": [float(z) for z in self.ratio_at(self.mode_frequencies_hz)],
+                "stiffness": "K0 = sum k0 b b^T, the initial system's (elements' k0)"}
+
+
+def mode_frequencies(mass: np.ndarray, k: np.ndarray) -> np.ndarray:
+    """Circular frequencies of M x'' + K x = 0 (M diagonal), ascending."""
+    s = 1.0 / np.sqrt(mass)
+    lam = np.linalg.eigvalsh(s[:, None] * k * s[None, :])
+    return np.sqrt(np.clip(lam, 0.0, None))
+
+
+def rayleigh_damping(spec: "dk.Rayleigh", mass: np.ndarray, k0: np.ndarray) -> RayleighDamping:
+    """a0, a1 from zeta_i = a0 / (2 w_i) + a1 w_i / 2 at the two frequencies (InputError naming
+    the deck key where they cannot be met)."""
+    w_modes = mode_frequencies(mass, k0)
+    f_modes = tuple(float(w / (2.0 * np.pi)) for w in w_modes)
+    if spec.modes is not None:
+        w = [w_modes[m - 1] for m in spec.modes]
+        bad = [m for m, x in zip(spec.modes, w) if not x > 1e-12 * max(w_modes.max(), 1e-300)]
+        if bad:
+            raise InputError(f"damping.rayleigh.modes: mode {bad[0]} of the initial system has no stiffness "
+                             "(zero frequency): give frequencies_hz")
+    else:
+        w = [2.0 * np.pi * f for f in spec.frequencies_hz]
+    z = spec.ratios
+    a = np.linalg.solve(np.array([[0.5 / w[0], 0.5 * w[0]], [0.5 / w[1], 0.5 * w[1]]]), np.array(z))
+    a0, a1 = float(a[0]), float(a[1])
+    if a0 < 0.0 or a1 < 0.0:
+        # two ratios too different for the frequencies between them: a negative coefficient
+        # would feed energy into some modes
+        key = "modes" if spec.modes is not None else "frequencies_hz"
+        raise InputError(f"damping.rayleigh.ratio: {list(z)} at {[round(x / (2 * np.pi), 6) for x in w]} Hz "
+                         f"(damping.rayleigh.{key}) needs a0 = {a0:.4g}, a1 = {a1:.4g}: a negative coefficient "
+                         "gives negative damping; bring the ratios closer")
+    matrix = a0 * np.diag(mass) + a1 * k0
+    return RayleighDamping(a0, a1, (float(w[0] / (2 * np.pi)), float(w[1] / (2 * np.pi))), tuple(map(float, z)),
+                           tuple(spec.modes) if spec.modes is not None else None, f_modes, matrix)
+
+
+@dataclass(frozen=True)
 class System:
     """The rigid body on its elements: M q'' + C q' + R(q) = p(t) (seed eq. 11), q = (u1, u2, theta3).
 
@@ -266,6 +326,8 @@ class System:
     weight: np.ndarray | None = None
     #: the static equilibrium under the weight (rbhyst.solve.static), once found: the run starts there
     static: object | None = None
+    #: [damping.rayleigh]: C = a0 M + a1 K0, added to the dampers'
+    rayleigh: RayleighDamping | None = None
     #: what q is: the names and units of the coordinates and of the columns they head
     coordinates: tuple[Coordinate, ...] = PLANE
 
@@ -301,11 +363,13 @@ class System:
 
     @property
     def C(self) -> np.ndarray:
-        """Viscous damping matrix sum count c b b^T (n, n) of the dampers (zeros without)."""
+        """Viscous damping matrix (n, n): sum count c b b^T of the dampers, plus Rayleigh's (zeros without)."""
         c = np.zeros((self.n, self.n))
         for dp in self.dampers:
             b = np.asarray(dp.b)
             c += dp.count * dp.c * np.outer(b, b)
+        if self.rayleigh is not None:
+            c += self.rayleigh.matrix
         return c
 
     @property
@@ -527,6 +591,10 @@ def assemble(deck: dk.Deck, base: Path) -> System:
         x = body.vertex(dp.part, dp.vertex) if dp.vertex is not None else np.asarray(dp.point, float) - body.mass_centre
         b = b_vector(x[0], x[1], math.radians(dp.angle_deg))
         dampers.append(Damper((float(x[0]), float(x[1])), dp.angle_deg, dp.c, dp.count, tuple(map(float, b))))
+    rayleigh = None
+    if deck.damping is not None and deck.damping.rayleigh is not None:
+        k0 = (bvec.T * (np.array(mult, dtype=float) * np.array([k_el[n] for n in names]))) @ bvec
+        rayleigh = rayleigh_damping(deck.damping.rayleigh, mass, k0)
     weight = None
     if deck.body.gravity is not None:
         weight = body.mass * np.array([deck.body.gravity[0], deck.body.gravity[1], 0.0])
@@ -544,4 +612,5 @@ def assemble(deck: dk.Deck, base: Path) -> System:
         notes=tuple(notes),
         dampers=tuple(dampers),
         weight=weight,
+        rayleigh=rayleigh,
     )

@@ -22,6 +22,7 @@ from matplotlib.ticker import MaxNLocator
 
 from rbhyst.analyses.sweep.tables import PERCENTILE
 from rbhyst.report._style import plain_number, save, styled, subplots
+from rbhyst.report.fragility import plot_fragility  # noqa: F401 (the sweep's plotter draws fragility.png too)
 
 PLOT_FILES = ("ida.png", "vary.png", "motions.png")
 #: the peaks drawn, where the cases have them (every peak is in cases.csv and stats.csv)

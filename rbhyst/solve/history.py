@@ -59,7 +59,9 @@ class Layout:
         coords = system.coordinates
         n = len(coords)
         self.has_support = ex.has_support
-        self.damped = bool(system.dampers)
+        self.dampers = bool(system.dampers)  # their columns
+        # viscous work (and C v in the accelerations) with dampers or Rayleigh damping
+        self.damped = self.dampers or getattr(system, "rayleigh", None) is not None
         names = list(base_columns(coords))
         self.slices: dict[str, slice] = {family: slice(1 + k * n, 1 + (k + 1) * n)
                                          for k, family in enumerate(("d", "v", "a", "at"))}
@@ -81,7 +83,7 @@ class Layout:
         self.slices["elements"] = slice(len(names), len(names) + 2 * n_el)
         for k in range(1, n_el + 1):
             names += [f"e{k}_u_m", f"e{k}_f_N"]
-        if self.damped:
+        if self.dampers:
             n_d = len(system.damper_c)
             self.slices["dampers"] = slice(len(names), len(names) + 2 * n_d)
             for k in range(1, n_d + 1):
@@ -141,7 +143,7 @@ class Layout:
         el = self.slices["elements"]
         out[:, el.start:el.stop:2] = raw.u[:, self._expand]
         out[:, el.start + 1:el.stop:2] = raw.f[:, self._expand]
-        if self.damped:
+        if self.dampers:
             dv = raw.v @ self._db
             ds = self.slices["dampers"]
             out[:, ds.start:ds.stop:2] = dv

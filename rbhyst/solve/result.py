@@ -63,6 +63,7 @@ class Result:
     spectra: "LocatedSpectra | None" = None  # output.spectra: of the ground, G and the points, over every step
     #: (result, out, plots=) -> folder: what :meth:`write` calls (set by the pipeline above)
     writer: Callable | None = field(default=None, repr=False, compare=False)
+    deck: dict | None = None  # the deck as run (its keys as given, the run's overrides applied)
 
     @property
     def q_sample(self) -> np.ndarray:
@@ -156,6 +157,7 @@ class Result:
             "elements": self._elements_summary(),
             **({"dampers": [{"x_m": list(dp.x), "angle_deg": dp.angle_deg, "c_N_s_m": dp.c, "count": dp.count}
                             for dp in system.dampers]} if system.dampers else {}),
+            **({"rayleigh": system.rayleigh.summary()} if getattr(system, "rayleigh", None) is not None else {}),
             **({"static": self._static_summary()} if system.static is not None else {}),
             "analysis": {
                 "integrator": s.integrator,
@@ -187,6 +189,7 @@ class Result:
             "notes": list(self.notes),
             "warnings": list(self.warnings),
             **({"spectra": self.spectra.summary()} if self.spectra is not None else {}),
+            **({"deck": self.deck} if self.deck is not None else {}),
         }
 
     def _elements_summary(self) -> list[dict]:

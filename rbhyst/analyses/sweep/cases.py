@@ -66,6 +66,7 @@ class Sweep:
     motions: list[str]
     vary_keys: list[str]
     cases: list[Case] = field(default_factory=list)
+    fragility: Any = None  # analyses.fragility.FragilityPlan, with [[limit_states]]
     cluster: Cluster | None = None  # the sweep file's [cluster], its files' paths absolute
 
     @property
@@ -122,6 +123,10 @@ def load_sweep(path: str | Path) -> Sweep:
                   motions=[m.name for m in motions], vary_keys=vary_keys,
                   cluster=spec.cluster.resolved(here) if spec.cluster is not None else None)
     sweep.cases = _cases(deck, motions, combos, kind, own, digests)
+    if spec.limit_states:
+        from rbhyst.analyses.fragility import plan_fragility
+
+        sweep.fragility = plan_fragility(sweep)
     return sweep
 
 

@@ -76,12 +76,16 @@ class Outcome:
 Progress = Callable[[int, int, int], None]  # (cases done, of which failed, cases to compute)
 
 
-def final_files(save_histories: bool, plotter=None) -> list[str]:
+def final_files(save_histories: bool, plotter=None, fragility: bool = False) -> list[str]:
     names = [CASES_CSV, STATS_CSV, SWEEP_JSON]
     if save_histories:
         names.append(HISTORIES_FILE)
     if plotter is not None:
         names.extend(plotter.PLOT_FILES)
+    if fragility:
+        from rbhyst.analyses.fragility import files
+
+        names.extend(files(plotter is not None))
     return names
 
 
@@ -126,7 +130,7 @@ def run_sweep(sweep: Sweep, out: str | Path | None = None, workers: int | None =
         from rbhyst.analyses.sweep.histories import require_pyarrow
 
         require_pyarrow()
-    check_out(out, final_files(save_histories, plotter))
+    check_out(out, final_files(save_histories, plotter, sweep.fragility is not None))
     journal = Journal(out, fresh=fresh)
     outcome = Outcome(sweep, out, t_start=time.perf_counter())
     todo: dict[str, dict] = {}
@@ -342,6 +346,10 @@ def _write_files(outcome: Outcome, journal: Journal, save_histories: bool, plott
             assemble(tmp / HISTORIES_FILE, sweep.cases, parts)
         if plotter is not None:
             plotter.write_plots(header, rows, sweep.vary_keys, sweep.scale_kind, tmp, _vary_units(sweep))
+        if sweep.fragility is not None:
+            from rbhyst.analyses.fragility import write_fragility
+
+            write_fragility(sweep.fragility, header, rows, tmp, plotter)
 
 
 def _vary_units(sweep) -> dict[str, str | None]:
@@ -377,6 +385,7 @@ def _about(outcome: Outcome) -> dict:
         "statistics": f"stats.csv over the motions of each scale level and vary combination: mean, median "
                       f"and p84 = numpy.percentile(x, {PERCENTILE:g}) (linear interpolation between order "
                       f"statistics), max",
+        **({"fragility": sweep.fragility.about()} if sweep.fragility is not None else {}),
         "case_key": "sha256 of the case's validated deck (without title, output.directory, output.plots), "
                     "each record file replaced by the sha256 of its bytes, and the rbhyst version",
     }

@@ -8,11 +8,11 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import Annotated, Any
+from typing import Annotated, Any, Literal
 
 from pydantic import Field, ValidationError, field_validator, model_validator
 
-from rbhyst.model.deck import AccelUnits, PosFloat, Support, _messages, _Model, read_mapping
+from rbhyst.model.deck import AccelUnits, PosFloat, Support, _key_problems, _messages, _Model, read_mapping
 from rbhyst.errors import InputError
 
 Name = Annotated[str, Field(min_length=1, pattern=r"^[^\x00-\x1f\x7f]+$")]
@@ -100,6 +100,34 @@ class CaseSpec(_Model):
         return flatten(v, leaf=lambda x: not isinstance(x, dict)) if isinstance(v, dict) else v
 
 
+class LimitState(_Model):
+    """A limit state: a case exceeds it when ``quantity`` (a cases.csv column, or + - * / max min
+    abs of them and numbers) reaches ``limit``."""
+
+    name: Name
+    quantity: Annotated[str, Field(min_length=1, max_length=500)]  # (parsed with the columns it names)
+    limit: float
+
+
+class FragilityOptions(_Model):
+    """How the fragility curves are fitted: the intensity measure and the bootstrap."""
+
+    intensity: Literal["scale", "pga_g", "sa_g"] = "scale"
+    period_s: PosFloat | None = None  # Sa's period (intensity = "sa_g")
+    damping: Annotated[float, Field(ge=0, lt=1)] = 0.05  # Sa's damping ratio
+    confidence: Annotated[float, Field(gt=0, lt=1)] = 0.9
+    bootstrap: Annotated[int, Field(ge=0, le=100_000)] = 1000
+    seed: Annotated[int, Field(ge=0)] = 1
+
+    @model_validator(mode="after")
+    def _period(self):
+        if self.intensity == "sa_g" and self.period_s is None:
+            raise _key_problems([("period_s", "required with intensity = \"sa_g\" (the period of Sa, s)")])
+        if self.intensity != "sa_g" and self.period_s is not None:
+            raise _key_problems([("period_s", f"goes with intensity = \"sa_g\", not {self.intensity!r}")])
+        return self
+
+
 class Cluster(_Model):
     """Where the cases run instead of local workers: a Dask scheduler, and the files of its TLS
     (the CA's certificate, this client's certificate and key; relative to the sweep file)."""
@@ -124,6 +152,10 @@ class SweepSpec(_Model):
     scale: Scale | None = None
     vary: dict[str, Annotated[list[Any], Field(min_length=1)]] | None = None
     cases: Annotated[list[CaseSpec], Field(min_length=1)] | None = None
+    limit_states: Annotated[list[LimitState], Field(min_length=1)] | None = None
+    fragility: FragilityOptions | None = None
+
+
     cluster: Cluster | None = None
 
     @field_validator("vary", mode="before")
@@ -149,6 +181,8 @@ class SweepSpec(_Model):
     def _vary_or_cases(self):
         if self.vary is not None and self.cases is not None:
             raise ValueError("give `vary` (every combination) or `cases` (the combinations listed), not both")
+        if self.fragility is not None and self.limit_states is None:
+            raise _key_problems([("fragility", "give [[limit_states]] (name, quantity, limit) to fit curves to")])
         return self
 
 

@@ -17,17 +17,20 @@ from rbhyst.analyses.sweep.cases import Case, format_value
 
 #: the percentile stats.csv reports beside the median, by numpy's default (linear) rule
 PERCENTILE = 84.0
+#: the groups of a case's numbers and the prefix of their columns, in cases.csv's order
+_PREFIX = {"peaks": "peak_", "stroke": "stroke_", "energy": "energy_", "accuracy": "accuracy_"}
 
 
 def result_columns(entries: Iterable[dict | None]) -> list[str]:
-    """peak_<column> for every peak of every result, then energy_<key>, then accuracy_<key>,
-    each in the order first met (a scene with more elements adds its columns)."""
-    groups: dict[str, dict[str, None]] = {"peaks": {}, "energy": {}, "accuracy": {}}
+    """peak_<column> for every peak of every result, then stroke_e<k> (the stroke utilization of
+    each element with a stroke), energy_<key>, accuracy_<key>, each in the order first met (a
+    scene with more elements adds its columns)."""
+    groups: dict[str, dict[str, None]] = {g: {} for g in _PREFIX}
     for e in entries:
         if e and e.get("status") == "ok":
             for g, names in groups.items():
                 names.update(dict.fromkeys(e.get(g) or {}))
-    prefix = {"peaks": "peak_", "energy": "energy_", "accuracy": "accuracy_"}
+    prefix = _PREFIX
     return [prefix[g] + n for g, names in groups.items() for n in names]
 
 
@@ -36,7 +39,7 @@ def result_values(entry: dict | None, columns: list[str]) -> dict[str, float | N
     out: dict[str, float | None] = {}
     flat = {}
     if entry and entry.get("status") == "ok":
-        for g, prefix in (("peaks", "peak_"), ("energy", "energy_"), ("accuracy", "accuracy_")):
+        for g, prefix in _PREFIX.items():
             flat.update({prefix + k: v for k, v in (entry.get(g) or {}).items()})
     for c in columns:
         out[c] = flat.get(c)

@@ -91,12 +91,24 @@ def run_case(base, key: str, values: dict, histories: bool = False) -> dict:
         peaks=_finite(summary["peaks"]),
         energy=_finite({k: v for k, v in summary.get("energy", {}).items() if k != "warn_above"}),
         accuracy=_finite(without_timings(flat_numbers(accuracy))) if accuracy else {},
+        stroke=_finite(stroke_utilizations(summary)),
         # a case's computing: its time stepping and its error estimate
         wall_s=summary["analysis"]["wall_s"] + ((accuracy or {}).get("wall_s") or 0.0),
         elapsed_s=time.perf_counter() - tic,
     )
     if histories and result.table is not None:
         out["history"] = {"columns": list(result.columns), "table": np.ascontiguousarray(result.table)}
+    return out
+
+
+def stroke_utilizations(summary: dict) -> dict[str, float]:
+    """{"e3": 0.8, ...}: each [[elements]] entry with a stroke, named by its first element's
+    number in the CSV (its count deform alike), and the share of the stroke it used."""
+    out, k = {}, 1
+    for e in summary.get("elements", []):
+        if "stroke" in e:
+            out[f"e{k}"] = e["stroke"]["utilization"]
+        k += e["count"]
     return out
 
 

@@ -1,0 +1,238 @@
+"""report.html: self-contained (every figure embedded and equal to its PNG, nothing fetched),
+every number equal to the file it comes from, every warning and note, the deck as run; added
+to a folder without touching the run's files; rendered by a real browser where one is installed."""
+
+from __future__ import annotations
+
+import base64
+import json
+import re
+import shutil
+import subprocess
+import tomllib
+from html.parser import HTMLParser
+from pathlib import Path
+
+import numpy as np
+import pytest
+import tomli_w
+
+from rbhyst.report.html import fmt
+from conftest import DECKS, invoke, snapshot
+
+
+class Page(HTMLParser):
+    """The images, the numbers with their sources, the text and every src/href of a page."""
+
+    def __init__(self, text: str):
+        super().__init__()
+        self.images, self.numbers, self.links, self.pre, self.text = [], [], [], [], []
+        self._number = None
+        self._in_pre = False
+        self.feed(text)
+
+    def handle_starttag(self, tag, attrs):
+        a = dict(attrs)
+        if tag == "img":
+            self.images.append(a)
+        for k in ("src", "href"):
+            if k in a:
+                self.links.append(a[k])
+        if "data-src" in a:
+            self._number = [a, ""]
+            self.numbers.append(self._number)
+        if tag == "pre":
+            self._in_pre = True
+            self.pre.append("")
+
+    def handle_endtag(self, tag):
+        if tag == "pre":
+            self._in_pre = False
+        if tag in ("td", "span"):
+            self._number = None
+
+    def handle_data(self, data):
+        self.text.append(data)
+        if self._number is not None:
+            self._number[1] += data
+        if self._in_pre:
+            self.pre[-1] += data
+
+
+def resolve(folder: Path, src: str) -> float:
+    """The number a data-src names: summary.json:peaks.u1_m, stats.csv:3:median (row from 0)."""
+    import csv
+
+    file, _, where = src.partition(":")
+    if file.endswith(".json"):
+        node = json.loads((folder / file).read_text())
+        for part in where.split("."):
+            node = node[int(part)] if isinstance(node, list) else node[part]
+        return float(node)
+    row, _, column = where.partition(":")
+    with open(folder / file, newline="") as fh:
+        return float(list(csv.DictReader(fh))[int(row)][column])
+
+
+def check_page(folder: Path) -> Page:
+    text = (folder / "report.html").read_text()
+    page = Page(text)
+    manifest = json.loads((folder / ".rbhyst.json").read_text())["files"]
+    pngs = sorted(n for n in manifest if n.endswith(".png"))
+    # every figure of the folder, embedded byte for byte
+    assert sorted(i["data-file"] for i in page.images) == pngs
+    for img in page.images:
+        assert img["src"].startswith("data:image/png;base64,")
+        data = base64.b64decode(img["src"].split(",", 1)[1], validate=True)
+        assert data == (folder / img["data-file"]).read_bytes()
+        import matplotlib.image
+
+        assert matplotlib.image.imread(__import__("io").BytesIO(data)).size > 0  # it decodes
+    # nothing from elsewhere
+    assert all(link.startswith("data:") for link in page.links)
+    bare = re.sub(r"data:image/png;base64,[A-Za-z0-9+/=]+", "", text)
+    assert not re.search(r"(?i)(https?:|//[a-z0-9.-]+/|@import|url\(|<script|<link)", bare)
+    # every number is its file's, shown as the page says
+    assert len(page.numbers) > 20
+    for attrs, shown in page.numbers:
+        value = resolve(folder, attrs["data-src"])
+        assert float(attrs["data-value"]) == value, attrs["data-src"]
+        assert shown.strip() == fmt(value, attrs["data-kind"]), attrs["data-src"]
+    return page
+
+
+@pytest.fixture(scope="module")
+def run_folder(tmp_path_factory):
+    """The seed deck, 3 s, with points, strokes, a damper, Rayleigh damping and spectra, run with --report."""
+    folder = tmp_path_factory.mktemp("report")
+    shutil.copytree(DECKS / "records", folder / "records")
+    d = tomllib.loads((DECKS / "seed_wri.toml").read_text())
+    d["analysis"]["duration"] = 3.0
+    d["elements"][0]["stroke"] = 0.004
+    d["elements"][1]["stroke"] = [-0.003, 0.004]
+    d["dampers"] = [{"vertex": 6, "angle_deg": 0.0, "c": 500.0}]
+    d["damping"] = {"rayleigh": {"ratio": 0.01, "modes": [1, 3]}}
+    d["output"] = {"points": [{"name": "top", "point": [-0.1286, 1.0571]}], "spectra": {"damping": 0.05}}
+    deck = folder / "deck.toml"
+    deck.write_text(tomli_w.dumps(d))
+    code, err = invoke("run", deck, "--out", folder / "out", "--integrator", "central-difference", "--report")
+    assert code == 0, err
+    return folder / "out", err
+
+
+def test_a_run_report_holds_everything_from_its_files(run_folder):
+    out, err = run_folder
+    page = check_page(out)
+    summary = json.loads((out / "summary.json").read_text())
+    text = " ".join(" ".join(page.text).split())
+    for line in summary["warnings"] + summary["notes"]:
+        assert " ".join(line.split()) in text
+    assert summary["warnings"]  # (this scene warns: its alphat3)
+    srcs = {a["data-src"] for a, _ in page.numbers}
+    for k in range(1, 9):  # per element: force, deformation; per point: total accelerations
+        assert {f"summary.json:peaks.e{k}_f_N", f"summary.json:peaks.e{k}_u_m"} <= srcs
+    assert {"summary.json:elements.0.stroke.utilization", "summary.json:elements.1.stroke.utilization",
+            "summary.json:peaks.top_at1_m_s2", "summary.json:peaks.top_at2_m_s2", "summary.json:rayleigh.a1_s",
+            "summary.json:accuracy.estimated_error.alphat3", "summary.json:spectra.peaks.0.sa_m_s2"} <= srcs
+    # the deck as run: the deck's own keys, with the command line's integrator
+    deck = tomllib.loads(page.pre[0])
+    assert deck == summary["deck"] and deck["analysis"]["integrator"] == "central-difference"
+    assert "report.html" in json.loads((out / ".rbhyst.json").read_text())["files"]
+
+
+def test_report_adds_its_file_and_touches_nothing_else(run_folder, tmp_path):
+    out = tmp_path / "out"
+    shutil.copytree(run_folder[0], out)
+    (out / "report.html").unlink()
+    (out / "mine.txt").write_text("mine")
+    before = snapshot(out)
+    code, err = invoke("report", out)
+    assert code == 0 and err.strip() == f"wrote {out / 'report.html'}"
+    after = snapshot(out)
+    assert {k: v for k, v in after.items() if k not in ("report.html", ".rbhyst.json")} == \
+        {k: v for k, v in before.items() if k != ".rbhyst.json"}
+    files = json.loads((out / ".rbhyst.json").read_text())["files"]
+    assert set(files) == set(json.loads(before[".rbhyst.json"][0])["files"]) | {"report.html"}
+    # the next run that writes no report takes the stale one away, like any file of its own
+    code, err = invoke("run", run_folder[0].parent / "deck.toml", "--out", out, "--no-plots")
+    assert code == 0, err
+    assert not (out / "report.html").exists() and (out / "mine.txt").read_text() == "mine"
+
+
+def test_report_refuses_what_is_not_a_results_folder_or_not_its_own(run_folder, tmp_path):
+    code, err = invoke("report", tmp_path / "nowhere")
+    assert code == 2 and err.splitlines() == [f"error: {tmp_path / 'nowhere'}: no such folder"]
+    (tmp_path / "notes").mkdir()
+    code, err = invoke("report", tmp_path / "notes")
+    assert code == 2 and err.startswith(f"error: {tmp_path / 'notes'}: holds no results of rbhyst run or rbhyst sweep")
+    out = tmp_path / "out"
+    shutil.copytree(run_folder[0], out)
+    manifest = json.loads((out / ".rbhyst.json").read_text())
+    manifest["files"].remove("report.html")
+    (out / ".rbhyst.json").write_text(json.dumps(manifest))
+    (out / "report.html").write_text("my own notes")
+    before = snapshot(out)
+    code, err = invoke("report", out)
+    assert code == 2 and "report.html exists and rbhyst did not write it" in err and "Traceback" not in err
+    code, err = invoke("run", run_folder[0].parent / "deck.toml", "--out", out, "--report", "--no-plots")
+    assert code == 2 and "report.html exists and rbhyst did not write it" in err
+    assert snapshot(out) == before
+
+
+@pytest.fixture(scope="module")
+def sweep_folder(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("sweep_report")
+    shutil.copytree(DECKS / "records", folder / "records")
+    d = tomllib.loads((DECKS / "seed_wri.toml").read_text())
+    d["analysis"].update(duration=2.0)
+    (folder / "deck.toml").write_text(tomli_w.dumps(d))
+    x1 = {"file": "records/synthetic_x1.csv", "units": "g"}
+    x2 = {"file": "records/synthetic_x2.csv", "units": "g"}
+    sweep = {"deck": "deck.toml", "motions": [{"name": "syn", "x1": x1, "x2": x2}, {"name": "swapped", "x1": x2, "x2": x1}],
+             "scale": {"factors": [0.5, 1.5, 3.0]},
+             "vary": {"body.mass": [700.0, 815.773]},
+             "limit_states": [{"name": "at1", "quantity": "peak_at1_m_s2", "limit": 4.0},
+                              {"name": "none", "quantity": "peak_u1_m", "limit": 1.0}],
+             "fragility": {"bootstrap": 200}}
+    (folder / "sweep.toml").write_text(tomli_w.dumps(sweep))
+    code, err = invoke("sweep", folder / "sweep.toml", "--workers", "1", "--report")
+    assert code == 0, err
+    return folder / "results" / "sweep"
+
+
+def test_a_sweep_report_holds_its_statistics_and_fragility(sweep_folder):
+    page = check_page(sweep_folder)
+    srcs = {a["data-src"].split(":")[0] for a, _ in page.numbers}
+    assert {"sweep.json", "stats.csv", "fragility.csv", "cases.csv"} <= srcs
+    assert any("accuracy_estimated_error_" in a["data-src"] for a, _ in page.numbers)  # the worst case's
+    text = " ".join(page.text)
+    assert "no case reaches the limit (0 of 6" in text  # a refused curve says why
+    assert "fragility.png" in {i["data-file"] for i in page.images}
+
+
+def _chromium() -> str | None:
+    return shutil.which("chromium") or shutil.which("chromium-browser") or shutil.which("google-chrome")
+
+
+@pytest.mark.parametrize("which", ["run", "sweep"])
+def test_a_browser_renders_it(which, run_folder, sweep_folder, tmp_path):
+    browser = _chromium()
+    if browser is None:
+        pytest.skip("no chromium on this machine")
+    import matplotlib.image
+
+    folder = run_folder[0] if which == "run" else sweep_folder
+    shot, pdf = tmp_path / "shot.png", tmp_path / "report.pdf"
+    common = [browser, "--headless", "--no-sandbox", "--disable-gpu", "--hide-scrollbars",
+              f"--user-data-dir={tmp_path / 'profile'}"]
+    url = (folder / "report.html").resolve().as_uri()
+    subprocess.run([*common, f"--screenshot={shot}", "--window-size=1200,2400", url], check=True, timeout=120,
+                   capture_output=True)
+    pixels = matplotlib.image.imread(shot)[:, :, :3]
+    assert pixels.shape[:2] == (2400, 1200)
+    assert pixels.std() > 0.1  # not blank: text, tables and figures
+    assert (pixels.min(axis=2) < 0.5).mean() > 0.01  # dark ink on a good share of it
+    subprocess.run([*common, "--no-pdf-header-footer", f"--print-to-pdf={pdf}", url], check=True, timeout=120,
+                   capture_output=True)
+    pages = len(re.findall(rb"/Type\s*/Page[^s]", pdf.read_bytes()))
+    assert pages >= 3
