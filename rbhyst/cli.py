@@ -392,6 +392,8 @@ def sweep(
 
     Finished cases are kept as they come: the same command after an interruption computes
     only what is missing.
+
+    Long because the progress bar's callbacks close over the command's own state.
     """
     import time
 

@@ -132,3 +132,14 @@ source_stamp()
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                           cwd=PACKAGE.parent)
     assert done.returncode == 0, done.stderr
+
+
+def test_a_long_function_says_why():
+    """Over 80 lines, a function says in its docstring why it is long (or is split)."""
+    long = []
+    for path in PACKAGE.rglob("*.py"):
+        for node in ast.walk(ast.parse(path.read_text())):
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)) and node.end_lineno - node.lineno >= 80:
+                if "long" not in (ast.get_docstring(node) or "").lower():
+                    long.append(f"{module_name(path)}.{node.name}")
+    assert long == []

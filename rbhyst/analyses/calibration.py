@@ -375,6 +375,9 @@ def fit_set(p0: np.ndarray, u: np.ndarray, f: np.ndarray, free: list[int] | None
     data range is a penalty and is checked on the result. Start 1 is ``p0``; the others
     perturb it at random (``seed``). Raises AnalysisError when no start gives a set with
     ordered limiting curves.
+
+    Long because the stages share the data, the bounds and the best start: split, they would
+    pass them all around.
     """
     from scipy.optimize import least_squares
 

@@ -18,15 +18,15 @@ is walked here: nothing of the user's text is ever executed.
 from __future__ import annotations
 
 import ast
-import csv
 import difflib
 import functools
-import io
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+
+from rbhyst.files.csvfile import to_csv
 
 #: the files fragility adds to a sweep's folder (and its plot, with plots)
 CSV_FILE, STRIPES_FILE, PLOT_FILE = "fragility.csv", "fragility_stripes.csv", "fragility.png"
@@ -471,7 +471,7 @@ def csv_text(plan: FragilityPlan, found: list[Curve]) -> str:
                      int(np.sum(c.n > 0)), c.status, _num(c.median), _num(c.beta), _num(ci_m[0]), _num(ci_m[1]),
                      _num(ci_b[0]), _num(ci_b[1]), _num(plan.options.confidence) if c.median_ci else "",
                      plan.options.bootstrap if c.fitted else "", c.identified if c.fitted else "", c.message])
-    return _csv(header, rows)
+    return to_csv(header, rows)
 
 
 def stripes_text(plan: FragilityPlan, found: list[Curve]) -> str:
@@ -487,7 +487,7 @@ def stripes_text(plan: FragilityPlan, found: list[Curve]) -> str:
                          _num(None if p is None else float(p[j])),
                          _num(None if c.p_bounds is None else float(c.p_bounds[0][j])),
                          _num(None if c.p_bounds is None else float(c.p_bounds[1][j]))])
-    return _csv(header, rows)
+    return to_csv(header, rows)
 
 
 def write_fragility(plan: FragilityPlan, header: list[str], rows: list[list], folder: Path,
@@ -506,14 +506,6 @@ def write_fragility(plan: FragilityPlan, header: list[str], rows: list[list], fo
 
 def files(plots: bool) -> list[str]:
     return [CSV_FILE, STRIPES_FILE, *([PLOT_FILE] if plots else [])]
-
-
-def _csv(header, rows) -> str:
-    buf = io.StringIO()
-    w = csv.writer(buf, lineterminator="\n")
-    w.writerow(header)
-    w.writerows(rows)
-    return buf.getvalue()
 
 
 def _num(v) -> str:

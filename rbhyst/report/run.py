@@ -44,7 +44,10 @@ def _shares_line(dp, elements) -> bool:
 def plot_body(result: Result, path: Path):
     """The body (every part, the denser darker, with its mass), its mass centre G and its
     elements (seed Fig. 3a); a damper on an element's line is drawn beside it, in parallel;
-    no label covers another (rbhyst.report._labels). Returns the figure (saved to ``path``)."""
+    no label covers another (rbhyst.report._labels). Returns the figure (saved to ``path``).
+
+    Long because every mark drawn is registered with one label placer, so that no label covers another.
+    """
     system = result.system
     body = system.body
     fig, ax = subplots(figsize=(5.5, 5.5))

@@ -177,7 +177,10 @@ def qualify(deck, req: Request, folder: Path, integrator: str | None = None, dt:
             tolerance: float | None = None, say=None) -> Verdict:
     """Make or take the motions, run the deck on each, judge every criterion; write into ``folder``
     (a staging folder): qualification.json, trs.csv, motions.json (with motions made), the
-    motions' records and run_<k>/summary.json (the plot is the caller's: report.qualification)."""
+    motions' records and run_<k>/summary.json (the plot is the caller's: report.qualification).
+
+    Long because it is the qualification's pipeline read top to bottom: the motions, their
+    check, the runs, the criteria."""
     from rbhyst._version import __version__
     from rbhyst.model.system import assemble
     from rbhyst.results.analysis import run_deck

@@ -184,6 +184,9 @@ def run_sweep(sweep: Sweep, out: str | Path | None = None, workers: int | None =
 
 def _compute(backend, todo: list[tuple[str, dict]], journal: Journal, outcome: Outcome,
              save_histories: bool, progress: Progress | None) -> None:
+    """Run the cases in batches on the backend, keeping each as it comes back. Long because it
+    is one scheduling loop: its queue, the batches in flight and the recovery after a lost
+    worker share their state."""
     queue = deque(todo)
     solo: deque = deque()  # cases whose worker died: each runs alone, so that a death names its case
     inflight: dict[object, list[tuple[str, dict]]] = {}

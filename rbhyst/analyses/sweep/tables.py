@@ -7,11 +7,11 @@ listed case sets).
 
 from __future__ import annotations
 
-import csv
-import io
 from collections.abc import Iterable
 
 import numpy as np
+
+from rbhyst.files.csvfile import to_csv  # noqa: F401  (the sweep's tables are written with it)
 
 from rbhyst.analyses.sweep.cases import Case, format_value
 
@@ -98,14 +98,6 @@ def peak_stats(x: np.ndarray) -> dict[str, float | None]:
         return dict.fromkeys(("mean", "median", "p84", "max"))
     return {"mean": float(np.mean(x)), "median": float(np.median(x)),
             "p84": float(np.percentile(x, PERCENTILE)), "max": float(np.max(x))}
-
-
-def to_csv(header: list[str], rows: list[list]) -> str:
-    buf = io.StringIO()
-    w = csv.writer(buf, lineterminator="\n")
-    w.writerow(header)
-    w.writerows(rows)
-    return buf.getvalue()
 
 
 def _num(v) -> str:

@@ -152,7 +152,10 @@ def _g_dense(F, y_old, x, bvec, e, s, n):
 def _integrate(minv, bvec, mult, params, cm, brk, pcoef, sig, t_out, rtol, atol, init, y0, h_first, max_steps,
                A, B, C, E3, E5, D, out_y, out_eu, out_ef, out_eh, info, el, vec, K, F, p, gs):
     """The whole integration; el (6, ne), vec (7, ny), K (16, ny), F (7, ny), p (4, max(n, ne)), gs (NS + 1,)
-    are its work space (allocated by the caller: no reference counting in here), y0 (n,) the start."""
+    are its work space (allocated by the caller: no reference counting in here), y0 (n,) the start.
+
+    One function, long, because numba keeps the stepper's state in registers only within a function.
+    """
     ne = bvec.shape[0]
     n = len(minv)
     ny = 2 * n + 2  # q, v, input energy, viscous work

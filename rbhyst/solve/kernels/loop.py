@@ -48,6 +48,8 @@ def run_chunk(method, coef, mass, minv, cm, damped, bvec, mult, params, wgt,
     state and time (rbhyst.solve.history.Layout), never from a method's own variable (KR-alpha's
     is a(t) + O(h); any method's carries the load averaged over a step near a jump).
     Returns the number of rows written; info tells how it ended.
+
+    One function, long, because numba keeps the loop's state in registers only within a function.
     """
     ne = bvec.shape[0]
     n = len(minv)  # a compile-time constant: mass and minv are tuples (see integrators.steps)
