@@ -40,7 +40,7 @@ MARKERS = ("o", "s", "^", "D", "v", "P")
 def write_plots(header: list[str], rows: list[list], vary_keys: list[str], scale_kind: str, folder: Path,
                 units: dict[str, str | None] | None = None) -> list[str]:
     """The plots that fit the sweep's axes, into ``folder``; returns their names. ``units``:
-    the unit of each vary key (rbhyst.deck.key_unit), for the axes and legends."""
+    the unit of each vary key (rbhyst.model.deck.key_unit), for the axes and legends."""
     cases = _records(header, rows, vary_keys)
     ok = [c for c in cases if c["status"] == "ok"]
     quantities = _quantities(header, ok)
