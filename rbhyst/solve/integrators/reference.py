@@ -136,7 +136,10 @@ def _scales(system, pieces: Pieces, rtol):
     a rotation's at the radius of gyration sqrt(J / m) (J: its mass, m: the first translation's)."""
     kr = (system.bvec.T * (system.mult * system.k_reversal)) @ system.bvec
     p = _load_samples(pieces)
-    static = np.linalg.solve(kr, p.T).T
+    try:
+        static = np.linalg.solve(kr, p.T).T
+    except np.linalg.LinAlgError:  # stiffnesses far apart (an absurd f0): singular in floating point
+        static = np.linalg.lstsq(kr, p.T, rcond=None)[0].T
     spin = np.array([c.rotation for c in system.coordinates])
     m_t = system.mass[np.argmin(spin)] if not spin.all() else 1.0
     # lengths per unit of each coordinate: 1 for a translation, the radius of gyration for a rotation
