@@ -86,10 +86,10 @@ def test_an_interrupted_append_is_told_apart_by_its_wording(project):
 def test_a_line_too_short_to_name_its_case_is_counted(project):
     sweep, out, journal = finished(project)
     data = journal.read_bytes()
-    journal.write_bytes(data + b'{"ke')
+    journal.write_bytes(data + b'{"ke\n{"k')
     code, err = invoke("sweep", sweep, "--no-plots")
     assert code == 0, err
-    assert notes(err) == ["note: the store had 1 damaged line of no case of this sweep (set aside)"], err
+    assert notes(err) == ["note: the store had 2 damaged lines of no case of this sweep (set aside)"], err
     assert "computed 0, 8 already" in err
     code, err = invoke("sweep", sweep, "--no-plots")
     assert code == 0 and not notes(err)

@@ -134,7 +134,7 @@ def run_sweep(sweep: Sweep, out: str | Path | None = None, workers: int | None =
     journal = Journal(out, fresh=fresh)
     outcome = Outcome(sweep, out, t_start=time.perf_counter())
     todo: dict[str, dict] = {}
-    untrusted = {d.key: d.why for d in journal.damaged}
+    untrusted = list(journal.damaged)  # (key, why); the key None where too little of a line is left
     for c in sweep.cases:
         if c.problem is not None or c.key in todo:
             continue
@@ -142,7 +142,7 @@ def run_sweep(sweep: Sweep, out: str | Path | None = None, workers: int | None =
         if e is not None and save_histories and e.get("status") == "ok":
             why = journal.history_problem(c.key)
             if why not in (None, "not kept"):
-                untrusted[c.key] = why
+                untrusted.append((c.key, why))
             if why is not None:
                 e = None
         if e is not None:
@@ -273,13 +273,13 @@ def _compute(backend, todo: list[tuple[str, dict]], journal: Journal, outcome: O
             backend.close()
 
 
-def damage_notes(sweep: Sweep, untrusted: dict[str | None, str], shown: int = 5) -> list[str]:
+def damage_notes(sweep: Sweep, untrusted: list[tuple[str | None, str]], shown: int = 5) -> list[str]:
     """One line naming the stored cases that could not be trusted (they are computed again),
     by their numbers in cases.csv and why; damaged lines of cases no longer in the sweep are
     counted only."""
     numbers = {c.key: c.number for c in sweep.cases}
-    named = sorted((numbers[k], why) for k, why in untrusted.items() if k in numbers)
-    other = sum(1 for k in untrusted if k not in numbers)
+    named = sorted((numbers[k], why) for k, why in untrusted if k in numbers)
+    other = sum(1 for k, _ in untrusted if k not in numbers)
     if not named and not other:
         return []
     parts = [f"case {n} ({why})" for n, why in named[:shown]]
