@@ -626,18 +626,24 @@ def dask_processes(tmp_path):
         procs.stop()
 
 
-@pytest.mark.slow
-def test_a_lost_scheduler_stops_the_sweep_and_a_new_one_completes_it(project, dask_processes):
-    n = 12
-    sweep = write_sweep(project, {"deck": "seed_wri.toml",  # 20 s of the seed's record: a second a case
+def sweep_on_dask(project: Path, dask_processes, n: int, connect: str):
+    """A sweep of n cases of 20 s of the seed's record (a second a case) started on a scheduler
+    and workers of its own, with Dask's connect timeout ``connect``."""
+    sweep = write_sweep(project, {"deck": "seed_wri.toml",
                                   "vary": {"body.mass": [800.0 + k for k in range(n)], "analysis.duration": [20.0]}})
-    out = project / "results" / "sweep"
     scheduler, address = dask_processes.scheduler()
     dask_processes.workers(address)
     dask_processes.wait_for_workers(address)
-    env = {**os.environ, "DASK_DISTRIBUTED__COMM__TIMEOUTS__CONNECT": "2s"}
+    env = {**os.environ, "DASK_DISTRIBUTED__COMM__TIMEOUTS__CONNECT": connect}
     proc = subprocess.Popen([sys.executable, "-m", "rbhyst", "sweep", sweep.name, "--no-plots", "--scheduler", address],
                             cwd=sweep.parent, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+    return sweep, project / "results" / "sweep", scheduler, address, proc
+
+
+@pytest.mark.slow
+def test_a_lost_scheduler_stops_the_sweep_and_a_new_one_completes_it(project, dask_processes):
+    n = 12
+    sweep, out, scheduler, address, proc = sweep_on_dask(project, dask_processes, n, connect="2s")
     try:
         wait_for(proc, out, 3)
         dask_processes.kill(scheduler)
@@ -660,7 +666,8 @@ def test_a_lost_scheduler_stops_the_sweep_and_a_new_one_completes_it(project, da
     dask_processes.workers(address)
     dask_processes.wait_for_workers(address)
     proc = subprocess.run([sys.executable, "-m", "rbhyst", "sweep", sweep.name, "--no-plots", "--scheduler", address],
-                          cwd=sweep.parent, capture_output=True, text=True, env=env, timeout=120)
+                          cwd=sweep.parent, capture_output=True, text=True, timeout=120,
+                          env={**os.environ, "DASK_DISTRIBUTED__COMM__TIMEOUTS__CONNECT": "2s"})
     assert proc.returncode == 0, proc.stderr
     assert f"computed {n - kept} on {address} (2 worker threads), {kept} already in the folder" in proc.stderr
     assert journal_cases(out) == n  # every case computed once in all
@@ -853,15 +860,7 @@ def test_a_second_sweep_into_the_same_folder_is_refused_and_kill_9_leaves_no_loc
 @pytest.mark.slow
 def test_a_scheduler_back_within_the_timeout_costs_only_the_batches_in_flight(project, dask_processes):
     n = 12
-    sweep = write_sweep(project, {"deck": "seed_wri.toml",
-                                  "vary": {"body.mass": [800.0 + k for k in range(n)], "analysis.duration": [20.0]}})
-    out = project / "results" / "sweep"
-    scheduler, address = dask_processes.scheduler()
-    dask_processes.workers(address)
-    dask_processes.wait_for_workers(address)
-    env = {**os.environ, "DASK_DISTRIBUTED__COMM__TIMEOUTS__CONNECT": "20s"}
-    proc = subprocess.Popen([sys.executable, "-m", "rbhyst", "sweep", sweep.name, "--no-plots", "--scheduler", address],
-                            cwd=sweep.parent, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+    sweep, out, scheduler, address, proc = sweep_on_dask(project, dask_processes, n, connect="20s")
     try:
         wait_for(proc, out, 3)
         dask_processes.kill(scheduler)
