@@ -485,7 +485,7 @@ def sweep(
         n = len(outcome.killed)
         say(f"error: the sweep is incomplete: case{'s' * (n != 1)} {', '.join(map(str, outcome.killed))} killed "
             f"{'their' if n != 1 else 'its'} worker process every time (failed in cases.csv, not kept): the same "
-            "command tries them again, with more memory per worker if that was the cause")
+            f"command tries {'them' if n != 1 else 'it'} again, with more memory per worker if that was the cause")
         raise typer.Exit(EXIT_ANALYSIS)
 
 

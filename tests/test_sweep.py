@@ -537,7 +537,7 @@ def test_a_case_that_kills_its_worker_is_failed_and_the_others_finish(project, m
     took = time.perf_counter() - t0
     assert code == 3, err
     assert err.splitlines()[-1] == ("error: the sweep is incomplete: case 5 killed its worker process every time "
-                                    "(failed in cases.csv, not kept): the same command tries them again, with more "
+                                    "(failed in cases.csv, not kept): the same command tries it again, with more "
                                     "memory per worker if that was the cause")
     out = project / "results" / "sweep"
     rows = read_cases(out / "cases.csv")
