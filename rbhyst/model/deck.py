@@ -369,6 +369,8 @@ class Analysis(_Model):
     warn_error: Annotated[float, Field(gt=0, lt=1)] = 0.01
     #: estimate every run's error (false skips it: a sweep that has checked its dt once)
     estimate_error: bool = True
+    #: the body's kinematics: the seed's small rotations (eqs. 7-8) or exact rotations of any size
+    kinematics: Literal["small", "exact"] = "small"
 
     @field_validator("integrator")
     @classmethod

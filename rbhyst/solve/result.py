@@ -64,6 +64,8 @@ class Result:
     #: (result, out, plots=) -> folder: what :meth:`write` calls (set by the pipeline above)
     writer: Callable | None = field(default=None, repr=False, compare=False)
     deck: dict | None = None  # the deck as run (its keys as given, the run's overrides applied)
+    #: the kinematic model and the error it carries (rbhyst.solve.kinematic), when checked
+    kinematics: dict | None = None
 
     @property
     def q_sample(self) -> np.ndarray:
@@ -184,6 +186,7 @@ class Result:
                 **({"viscous_J": float(self._final("E_viscous_J"))} if "E_viscous_J" in self.columns else {}),
             },
             "accuracy": self.accuracy,
+            **({"kinematics": self.kinematics} if self.kinematics is not None else {}),
             "peaks": e.peaks(),
             "extremes": e.as_dict(),
             "notes": list(self.notes),

@@ -41,6 +41,7 @@ from rbhyst.solve.integrators import dop853_tableau as _dop
 from rbhyst.errors import AnalysisError
 from rbhyst.solve.kernels.compiled import kernel
 from rbhyst.solve.kernels.dop853_layout import (NS, R_ELEMENT, R_EVENTS, R_FEV, R_HMAX, R_HMIN, R_INFO, R_REJECTED, R_START_FLIPS, R_STATUS, R_STEPS, R_TIME, ST_NONFINITE, ST_OK, ST_OVERFLOW, ST_STEP_TOO_SMALL, ST_TOO_MANY_STEPS, ny)
+from rbhyst.model.kinematics import rows_at
 from rbhyst.model.records import Series
 from rbhyst.model.signals import SINE
 from rbhyst.solve.history import Layout, Raw
@@ -187,8 +188,11 @@ def _initial_branches(system, pieces: Pieces):
         p0 = p0 - static.r  # the weight is carried by the elements
     a0 = p0 / system.mass
     j0 = dp0 / system.mass
-    s = np.sign(system.bvec @ a0)
-    s2 = np.sign(system.bvec @ j0)
+    # the rows where the body starts (they differ from b only at a turned static equilibrium)
+    q0 = static.q if static is not None else np.zeros(system.n)
+    rows = rows_at(system.bvec, system.axial, system.rotation_index, q0)
+    s = np.sign(rows @ a0)
+    s2 = np.sign(rows @ j0)
     s = np.where(s != 0, s, np.where(s2 != 0, s2, 1.0))
     return s.astype(float)
 
@@ -249,7 +253,7 @@ def integrate(system, t_out: np.ndarray, rtol: float = RTOL, pieces=None, max_st
     info = np.zeros(R_INFO)
     # M^-1 as a tuple: its length n is a constant of the compiled kernel (one compilation per n)
     minv = tuple(1.0 / system.mass)
-    args = (minv, np.ascontiguousarray(system.bvec), system.mult, np.ascontiguousarray(system.params),
+    args = (minv, np.ascontiguousarray(system.bvec), system.kernel_axial, system.rotation_index, system.mult, np.ascontiguousarray(system.params),
             np.ascontiguousarray(system.C))
     work = (np.zeros((6, ne)), np.zeros((7, width)), np.zeros((16, width)), np.zeros((7, width)), np.zeros((4, max(n, ne))),
             np.zeros(NS + 1))
