@@ -101,11 +101,13 @@ def run(
             say(f"note: {note}")
     for warning in result.warnings:
         say(f"warning: {warning}")
-    say(run_line(result))
     from rbhyst.report.console import element_table, mode_table
 
     summary = result.summary()
-    for line in element_table(summary) + mode_table(summary["modes"]):
+    for line in mode_table(summary["modes"]):  # what the body is, then what it did
+        say(line)
+    say(run_line(result))
+    for line in element_table(summary):
         say(line)
     say(f"wrote {target}")
 
