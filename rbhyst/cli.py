@@ -101,12 +101,41 @@ def run(
             say(f"note: {note}")
     for warning in result.warnings:
         say(f"warning: {warning}")
-    say(run_line(result))
-    from rbhyst.report.console import element_table
+    from rbhyst.report.console import element_table, mode_table
 
-    for line in element_table(result.summary()):
+    summary = result.summary()
+    for line in mode_table(summary["modes"]):  # what the body is, then what it did
+        say(line)
+    say(run_line(result))
+    for line in element_table(summary):
         say(line)
     say(f"wrote {target}")
+
+
+@app.command(cls=Command)
+def modes(
+    deck: Annotated[Path, typer.Argument(help="TOML or YAML deck ([body], [hysteresis] and [[elements]] suffice).")],
+    as_json: Annotated[bool, typer.Option("--json", help="Print summary.json's modes as JSON instead of a table.")] = False,
+):
+    """Natural frequencies and mode shapes of the deck's body on its elements, without running it.
+
+    Of the initial system (M, K0) and, when the deck gives body.gravity, of the elements' tangents
+    at the static equilibrium under the weight. Undamped: dampers and Rayleigh damping do not
+    change them. Written to stdout; nothing is written to disk.
+    """
+    from rbhyst import api
+
+    with user_errors():
+        found = api.modes(deck)
+    if as_json:
+        import json
+
+        typer.echo(json.dumps(found, indent=2))
+        return
+    from rbhyst.report.console import mode_table
+
+    for line in mode_table(found):
+        typer.echo(line)
 
 
 def run_line(result) -> str:

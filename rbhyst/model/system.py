@@ -615,9 +615,21 @@ def _kernel_rows(deck: dk.Deck, body: Body, exact: bool):
     return rows, axial, names, mult, elements
 
 
-def assemble(deck: dk.Deck, base: Path) -> System:
-    """Build the System of a runnable deck; relative file paths resolve against ``base``."""
-    dk.check_runnable(deck)
+def _check_sections(deck: dk.Deck, run: bool) -> None:
+    """A run needs a body, elements and an analysis (dk.check_runnable); the modes the first two."""
+    if run:
+        dk.check_runnable(deck)
+        return
+    missing = [f"{key}: required for the body's modes" for key in ("body", "elements") if getattr(deck, key) is None]
+    if missing:
+        raise InputError(missing)
+
+
+def assemble(deck: dk.Deck, base: Path, run: bool = True) -> System:
+    """Build the System of a runnable deck; relative file paths resolve against ``base``.
+    ``run=False``: the body on its elements alone (what its modes need), without the excitation
+    and without asking for an analysis section."""
+    _check_sections(deck, run)
     body, notes = body_from_deck(deck.body)
     mass = np.array([body.mass, body.mass, body.inertia])
 
@@ -638,7 +650,7 @@ def assemble(deck: dk.Deck, base: Path) -> System:
     if free:
         raise InputError(f"elements: the body is not restrained against {'; '.join(free)}")
 
-    excitation = _excitation(deck, base, body, notes)
+    excitation = _excitation(deck, base, body, notes) if run else Excitation()
     dampers = []
     for dp in deck.dampers or []:
         x = body.vertex(dp.part, dp.vertex) if dp.vertex is not None else np.asarray(dp.point, float) - body.mass_centre

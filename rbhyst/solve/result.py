@@ -161,6 +161,7 @@ class Result:
                             for dp in system.dampers]} if system.dampers else {}),
             **({"rayleigh": system.rayleigh.summary()} if getattr(system, "rayleigh", None) is not None else {}),
             **({"static": self._static_summary()} if system.static is not None else {}),
+            "modes": self._modes_summary(),
             "analysis": {
                 "integrator": s.integrator,
                 "dt_s": s.dt,
@@ -218,6 +219,18 @@ class Result:
                 "elements": [{"u_m": float(a), "f_N": float(b)} for a, b in zip(u, f)],
                 "out_of_balance": st.residual, "iterations": st.iterations,
                 "note": "displacements in time_history.csv are measured from here; element deformations are total"}
+
+    def _modes_summary(self) -> dict:
+        """The undamped modes of the initial system and, at rest under gravity, of its tangent
+        (rbhyst.solve.modes); at_rest only where the run found the static equilibrium."""
+        from rbhyst.solve.modes import modes_summary
+
+        system = self.system
+        if system.weight is not None and system.static is None:  # (not a run's: no equilibrium to take)
+            import dataclasses
+
+            system = dataclasses.replace(system, weight=None)
+        return modes_summary(system)
 
     def _final(self, name: str) -> float:
         return self.plot.final[self.columns.index(name)]
