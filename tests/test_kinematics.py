@@ -221,3 +221,27 @@ def test_the_neglected_terms_flag_a_scene_before_the_rotation_does(tmp_path):
     assert kin["difference"] is not None
     assert kin["worst"]["difference"] > 3 * kin["max_rotation_rad"] / 2  # (6.3 times here)
     assert kin["neglected"]["share"] > 0.1 * res.settings.warn_error
+
+
+def test_the_modes_at_rest_feel_the_weight_with_exact_kinematics(tmp_path):
+    """A square on four vertical springs at its base corners and two horizontal ones at G's
+    level, under gravity: with exact rows, the rocking stiffness at rest is k_v sum x^2 less the
+    weight's W h (P-Delta, h = the half side from the springs up to G), which the seed's rows lack."""
+    from rbhyst.solve.modes import tangent_at_rest
+
+    kv, kh = 2.0e5, 1.0e5
+    data = {
+        "body": {"vertices": [[-C, -C], [C, -C], [C, C], [-C, C]], "mass": MASS, "gravity": [0.0, -9.81]},
+        "hysteresis": {"v": linear_set(kv), "h": linear_set(kh)},
+        "elements": [{"point": [C, -C], "angle_deg": 90.0, "hysteresis": "v"},
+                     {"point": [-C, -C], "angle_deg": 90.0, "hysteresis": "v"},
+                     {"point": [C, 0.0], "angle_deg": 0.0, "hysteresis": "h"},
+                     {"point": [-C, 0.0], "angle_deg": 0.0, "hysteresis": "h"}],
+        "analysis": {"dt": 1e-3, "duration": 0.1},
+    }
+    weight = MASS * 9.81
+    for kin, want in (("small", 2 * kv * C * C), ("exact", 2 * kv * C * C - weight * C)):
+        data["analysis"]["kinematics"] = kin
+        system, _ = scene(data, tmp_path)
+        k = tangent_at_rest(system)
+        assert k[2, 2] == pytest.approx(want, rel=1e-9), kin

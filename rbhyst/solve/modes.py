@@ -120,6 +120,7 @@ def initial_modes(system) -> Modes:
 
 def tangent_at_rest(system) -> np.ndarray:
     """Kt = B^T diag(mult k_t) B, k_t each element row's tangent (eq. 16) at the static equilibrium
+    (with exact kinematics, B at the equilibrium's rotation and the forces' geometric stiffness)
     under the weight, on the branch the weight loaded it along (an element it left undeformed: its
     virgin tangent, the larger of its two directions). The equilibrium is found here where the
     system does not carry it yet (AnalysisError where the elements cannot carry the weight)."""
@@ -128,7 +129,20 @@ def tangent_at_rest(system) -> np.ndarray:
         from rbhyst.solve.static import static_equilibrium
 
         static = static_equilibrium(system)
-    return element_stiffness(system, static.st[:, TANGENT])
+    if system.rotation_index < 0:
+        return element_stiffness(system, static.st[:, TANGENT])
+    # exact kinematics: the rows turned with the body, and the forces' geometric stiffness (the
+    # weight's P-Delta) sum mult f d2u/dtheta2 on the rotation
+    from rbhyst.model.kinematics import rows_at
+    from rbhyst.solve.kernels.layout import F
+
+    rot = system.rotation_index
+    rows = rows_at(system.bvec, system.axial, rot, static.q)
+    k = (rows.T * (system.mult * static.st[:, TANGENT])) @ rows
+    th = float(static.q[rot])
+    k[rot, rot] -= float(np.sum(system.mult * static.st[:, F] * (system.bvec[:, rot] * np.sin(th)
+                                                                 + system.axial * np.cos(th))))
+    return k
 
 
 def at_rest_modes(system) -> Modes | None:
