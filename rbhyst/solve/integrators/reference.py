@@ -13,9 +13,10 @@ dense output, Hairer, Norsett and Wanner, Solving ODEs I, II.10; the coefficient
 tables are scipy's), compiled with numba. Two kinds of events end a step:
 
 - a reversal: an element's velocity b . v crosses zero against its branch. Its time
-  is located on the dense output (bisection-secant to round-off), the step is redone
-  to exactly that time, and the element starts its new branch there, from the force
-  it has (eq. 14 with t_P = the reversal). Interior double crossings are looked for
+  is located on the dense output (bisection-secant to round-off), the state there is
+  the dense output's (the step, accepted, continued the old branch smoothly past it: no
+  step is redone), and the element starts its new branch there, from the force it has
+  (eq. 14 with t_P = the reversal). Interior double crossings are looked for
   on a cubic Hermite interpolant of b . v and, when suspected, on the dense output.
 - a breakpoint of the load: a record's samples (between them it is linear, and so are
   its pieces) and an analytic signal's start, end and corners (between them the kernel
