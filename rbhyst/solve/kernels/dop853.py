@@ -451,19 +451,11 @@ def _integrate(minv, bvec, axial, rot, mult, params, cm, brk, pcoef, sig, t_out,
                     for i in range(ny):
                         yo[i] = _dense(F, y, x, i)
                     io = _write(io, yo, bvec, axial, rot, mult, params, s, up, gp, ap, wacc, out_y, out_eu, out_ef, out_eh, n)
-                # redo the step to the reversal exactly
+                # the state at the reversal from the step's dense output (7th order, within the
+                # step's tolerance: the step was accepted), not from the step redone to it
                 h_ev = t_ev - t
-                if h_ev > 0.0:
-                    _stages(1, 12, t, h_ev, y, k, brk, pcoef, sig, minv, bvec, axial, rot, mult, params, cm, s, up, gp, p, A, C, K, ytmp)
-                    n_fev += 11
-                    for i in range(ny):
-                        acc = 0.0
-                        for j in range(12):
-                            acc += B[j] * K[j, i]
-                        y_ev[i] = y[i] + h_ev * acc
-                else:
-                    for i in range(ny):
-                        y_ev[i] = y[i]
+                for i in range(ny):
+                    y_ev[i] = _dense(F, y, x_ev, i) if h_ev > 0.0 else y[i]
                 t = t_ev
                 for i in range(ny):
                     y[i] = y_ev[i]
