@@ -68,7 +68,7 @@ def run(
     integrator: Annotated[Optional[str], typer.Option(help="Override analysis.integrator.")] = None,
     dt: Annotated[Optional[float], typer.Option(help="Override analysis.dt [s].")] = None,
     tolerance: Annotated[Optional[float], typer.Option(
-        help="The accuracy asked for (relative error of u1, u2, theta3): rbhyst chooses how to meet it.")] = None,
+        help="The accuracy asked for (relative error of the body's motion: u1, u2, theta3 in 2-D): rbhyst chooses how to meet it.")] = None,
     plots: Annotated[bool, typer.Option("--plots/--no-plots", help="Write PNG plots.")] = True,
     report: Annotated[bool, typer.Option("--report", help="Also write report.html (see `rbhyst report`).")] = False,
 ):
@@ -144,12 +144,13 @@ def run_line(result) -> str:
 
     e, s = result.extremes, result.settings
     g = ACCEL_UNITS["g"]
-    at = ", ".join(f"|{n}| = {e.peak(c):.4g} m/s2 ({e.peak(c) / g:.3g} g)"
-                   for n, c in (("at1", "at1_m_s2"), ("at2", "at2_m_s2")))
+    coords = result.system.coordinates
+    at = ", ".join(f"|{c.key('at')}| = {e.peak(c.column('at')):.4g} m/s2 ({e.peak(c.column('at')) / g:.3g} g)"
+                   for c in coords if not c.rotation)
     method = s.integrator + (f" (rtol {s.rtol:g})" if s.integrator == "adaptive" else "")
+    motion = ", ".join(f"|{c.key('d')}| = {e.peak(c.column('d')):.4g} {c.d[1]}" for c in coords)
     line = (f"{method}, dt = {s.dt:g} s, {result.steps} steps in {result.wall_s:.3g} s; peaks "
-            f"|u1| = {e.peak('u1_m'):.4g} m, |u2| = {e.peak('u2_m'):.4g} m, |theta3| = {e.peak('theta3_rad'):.4g} rad, "
-            f"{at}")
+            f"{motion}, {at}")
     acc = result.accuracy
     if acc and acc.get("estimated_error"):
         name, worst = max(acc["estimated_error"].items(), key=lambda kv: kv[1])

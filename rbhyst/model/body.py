@@ -114,7 +114,11 @@ def body_from_deck(spec: dk.Body) -> tuple[Body, list[str]]:
 
 
 def body_summary(body: Body) -> dict:
-    """The ``body`` entry of summary.json (README, Outputs)."""
+    """The ``body`` entry of summary.json (README, Outputs; a body in space: Three dimensions)."""
+    if getattr(body, "dimensions", 2) == 3:
+        from rbhyst.model.solid import solid_summary
+
+        return solid_summary(body)
     out = {"form": body.form}
     if body.form == "polygon":
         out["area_m2"] = body.parts[0].area

@@ -54,6 +54,9 @@ def rotation(axis: int, resultant: str | None = None) -> Coordinate:
 
 #: the seed's plane body: q = (u1, u2, theta3)
 PLANE = (translation(1), translation(2), rotation(3))
+#: a body in space: q = (u1, u2, u3, theta1, theta2, theta3); the moment resultants are R4..R6
+#: (N m) so that no key repeats a force's
+SPACE = (translation(1), translation(2), translation(3), rotation(1, "R4"), rotation(2, "R5"), rotation(3, "R6"))
 
 
 def columns(coordinates, family: str) -> list[str]:

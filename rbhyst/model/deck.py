@@ -26,7 +26,9 @@ from rbhyst.files.textfiles import read_text
 from rbhyst.model.hysteresis import limiting_curve, limiting_slope, parameter_set, reversal_stiffness
 
 PosFloat = Annotated[float, Field(gt=0)]
-Point = Annotated[list[float], Field(min_length=2, max_length=2)]
+#: a point: [x1, x2] in a plane deck, [x1, x2, x3] in a deck in space (the body's vertices
+#: decide which: :func:`dimension_problems`)
+Point = Annotated[list[float], Field(min_length=2, max_length=3)]
 
 ACCEL_UNITS = {"g": 9.80665, "m/s2": 1.0, "cm/s2": 0.01}
 FORCE_UNITS = {"N": 1.0, "kN": 1e3}
@@ -99,11 +101,26 @@ def _key_problems(problems: list[tuple[str, str]]) -> PydanticCustomError:
 Vertices = Annotated[list[Point], Field(min_length=3)]
 
 
-class Part(_Model):
-    """One uniform polygon of a body of several parts (seed eqs. 1-4 each)."""
+class Box(_Model):
+    """A rectangular box in space: its edges along x1, x2, x3 (m) and its centre (deck frame)."""
 
-    vertices: Vertices
+    size: Annotated[list[PosFloat], Field(min_length=3, max_length=3)]
+    centre: Annotated[list[float], Field(min_length=3, max_length=3)] = [0.0, 0.0, 0.0]
+
+
+class Part(_Model):
+    """One uniform polygon of a body of several parts (seed eqs. 1-4 each), or in space one
+    uniform convex polyhedron (the hull of ``vertices``) or ``box``."""
+
+    vertices: Vertices | None = None
+    box: Box | None = None
     mass: PosFloat
+
+    @model_validator(mode="after")
+    def _one_shape(self):
+        if (self.vertices is None) == (self.box is None):
+            raise ValueError("give exactly one of `vertices` or `box` (a box in space)")
+        return self
 
 
 class Body(_Model):
@@ -112,22 +129,31 @@ class Body(_Model):
     (about the mass centre) + ``vertices`` (the outline, for drawing and vertex references)."""
 
     vertices: Vertices | None = None
+    #: in space, a rectangular box instead of ``vertices``
+    box: Box | None = None
     mass: PosFloat | None = None
     parts: Annotated[list[Part], Field(min_length=1)] | None = None
     mass_centre: Point | None = None
-    inertia: PosFloat | None = None
+    #: J_x3 about the mass centre (kg m2) in the plane; in space the 3 x 3 tensor about it
+    inertia: PosFloat | Annotated[list[Annotated[list[float], Field(min_length=3, max_length=3)]],
+                                  Field(min_length=3, max_length=3)] | None = None
     #: the acceleration of gravity in the deck's frame (m/s2): the weight m g acts at G and the
     #: run starts from the static equilibrium under it (see README, "Gravity preload")
     gravity: Point | None = None
 
     @model_validator(mode="after")
     def _one_form(self):
-        given = [k for k in ("vertices", "mass", "mass_centre", "inertia") if getattr(self, k) is not None]
+        given = [k for k in ("vertices", "box", "mass", "mass_centre", "inertia") if getattr(self, k) is not None]
         problems = []
         if self.parts is not None:
             why = {"vertices": "the parts' vertices are the outline", "mass": "each part has its own mass",
-                   "mass_centre": "the parts give the mass centre", "inertia": "the parts give the inertia"}
+                   "mass_centre": "the parts give the mass centre", "inertia": "the parts give the inertia",
+                   "box": "each part has its own shape"}
             problems = [(k, f"not with body.parts: {why[k]}") for k in given]
+        elif "box" in given:
+            problems = [(k, "not with body.box: the box is the body's shape (its properties follow from it)")
+                        for k in ("vertices", "mass_centre", "inertia") if k in given]
+            problems += [(k, "required key is missing") for k in ("mass",) if k not in given]
         else:
             problems = [(k, "required key is missing") for k in ("vertices", "mass") if k not in given]
             direct = ("mass_centre", "inertia")
@@ -145,14 +171,25 @@ class Body(_Model):
             return "parts"
         return "polygon" if self.inertia is None else "direct"
 
+    @property
+    def dimensions(self) -> int:
+        """3 for a body in space (a box, or vertices of three coordinates), else 2."""
+        shapes = [(p.vertices, p.box) for p in self.parts] if self.parts is not None else [(self.vertices, self.box)]
+        first_vertices, first_box = shapes[0]
+        if first_box is not None:
+            return 3
+        return 3 if first_vertices and len(first_vertices[0]) == 3 else 2
+
 
 class _Placed(_Model):
-    """Something attached to the body at a vertex or a point, along an angle."""
+    """Something attached to the body at a vertex or a point, along an angle (in the plane) or a
+    direction (in space: its line of action, any length but zero)."""
 
     part: Annotated[int, Field(ge=1)] | None = None
     vertex: Annotated[int, Field(ge=1)] | None = None
     point: Point | None = None
-    angle_deg: float
+    angle_deg: float | None = None
+    direction: Annotated[list[float], Field(min_length=3, max_length=3)] | None = None
     count: Annotated[int, Field(ge=1)] = 1
 
     @model_validator(mode="after")
@@ -211,7 +248,8 @@ class Rayleigh(_Model):
     ratio: Annotated[float, Field(gt=0, lt=1)] | Annotated[list[Annotated[float, Field(gt=0, lt=1)]],
                                                            Field(min_length=2, max_length=2)]
     frequencies_hz: Annotated[list[PosFloat], Field(min_length=2, max_length=2)] | None = None
-    modes: Annotated[list[Annotated[int, Field(ge=1, le=3)]], Field(min_length=2, max_length=2)] | None = None
+    #: (at most 3 in the plane: dimension_problems)
+    modes: Annotated[list[Annotated[int, Field(ge=1, le=6)]], Field(min_length=2, max_length=2)] | None = None
 
     @model_validator(mode="after")
     def _two_points(self):
@@ -335,6 +373,7 @@ def _support_signal():
 class Support(_Model):
     x1: _support_signal() | None = None
     x2: _support_signal() | None = None
+    x3: _support_signal() | None = None  # in space only
 
 
 class Force(_Model):
@@ -343,6 +382,10 @@ class Force(_Model):
     p1: _signal(ForceUnits) | None = None
     p2: _signal(ForceUnits) | None = None
     m3: _signal(MomentUnits) | None = None
+    # in space only: the force along x3 and the moments about x1 and x2
+    p3: _signal(ForceUnits) | None = None
+    m1: _signal(MomentUnits) | None = None
+    m2: _signal(MomentUnits) | None = None
 
 
 class Excitation(_Model):
@@ -381,7 +424,7 @@ class Analysis(_Model):
 
 
 #: names a point may not take (case aside): G's own plots and spectra, the ground's spectra
-RESERVED_POINT_NAMES = ("G", "ground", "x1", "x2", "theta3")
+RESERVED_POINT_NAMES = ("G", "ground", "x1", "x2", "x3", "theta1", "theta2", "theta3")
 _POINT_NAME = re.compile(r"[A-Za-z0-9_]+")
 
 
@@ -672,6 +715,81 @@ def cross_references(deck: Deck) -> list[str]:
     return problems
 
 
+def _dimension_of(key: str, value, n: int) -> list[str]:
+    """A point of the wrong number of coordinates for a deck of n (one line naming the key)."""
+    if value is None or len(value) == n:
+        return []
+    space = "in space (3-D)" if n == 3 else "in the plane (2-D)"
+    return [f"{key}: List should have {'at most 2' if n == 2 else 'at least 3'} items: the deck is {space}, as its "
+            f"body's first vertex (or box) says, and every point in it has {n} coordinates"]
+
+
+def dimension_problems(deck: Deck) -> list[str]:
+    """A deck is plane or in space throughout: the body's first vertex (or a box) decides, and every
+    other vertex, point, mass centre, gravity and direction must agree (one line per key); in
+    space, elements take ``direction`` and never ``angle_deg``, in the plane the reverse."""
+    if deck.body is None:
+        return []
+    body = deck.body
+    n = body.dimensions
+    problems: list[str] = []
+    if body.parts is not None:
+        for i, p in enumerate(body.parts, start=1):
+            if p.box is not None and n == 2:
+                problems.append(f"body.parts[{i}].box: a box is a body in space, and body.parts[1] is a polygon "
+                                "in the plane (2-D)")
+            for j, v in enumerate(p.vertices or [], start=1):
+                problems += _dimension_of(f"body.parts[{i}].vertices[{j}]", v, n)
+    else:
+        for j, v in enumerate(body.vertices or [], start=1):
+            problems += _dimension_of(f"body.vertices[{j}]", v, n)
+    problems += _dimension_of("body.mass_centre", body.mass_centre, n)
+    problems += _dimension_of("body.gravity", body.gravity, n)
+    if body.inertia is not None:
+        tensor = isinstance(body.inertia, list)
+        if tensor and n == 2:
+            problems.append("body.inertia: a 3 x 3 tensor is for a body in space; in the plane J_x3 about the mass "
+                            "centre is one number (kg m2)")
+        elif not tensor and n == 3:
+            problems.append("body.inertia: in space the inertia is the 3 x 3 tensor about the mass centre (kg m2), "
+                            "[[J11, J12, J13], [J12, J22, J23], [J13, J23, J33]]")
+    for section in ("elements", "dampers"):
+        for k, el in enumerate(getattr(deck, section) or [], start=1):
+            problems += _dimension_of(f"{section}[{k}].point", el.point, n)
+            if n == 3:
+                if el.angle_deg is not None:
+                    problems.append(f"{section}[{k}].angle_deg: the deck is in space (3-D): give the line of action "
+                                    "as direction = [d1, d2, d3]")
+                elif el.direction is None:
+                    problems.append(f"{section}[{k}].direction: required key is missing")
+                elif not any(el.direction):
+                    problems.append(f"{section}[{k}].direction: [0, 0, 0] has no direction: give the line of "
+                                    "action, any length but zero")
+            else:
+                if el.direction is not None:
+                    problems.append(f"{section}[{k}].direction: the deck is in the plane (2-D): give the line of "
+                                    "action as angle_deg from x1")
+                elif el.angle_deg is None:
+                    problems.append(f"{section}[{k}].angle_deg: required key is missing")
+    ex = deck.excitation
+    if ex is not None and n == 2:
+        if ex.support is not None and ex.support.x3 is not None:
+            problems.append("excitation.support.x3: the deck is in the plane (2-D): support motion along x1 and x2 "
+                            "only")
+        if ex.force is not None:
+            problems += [f"excitation.force.{k}: the deck is in the plane (2-D): p1, p2 and m3 only"
+                         for k in ("p3", "m1", "m2") if getattr(ex.force, k) is not None]
+    if ex is not None and ex.force is not None:
+        problems += _dimension_of("excitation.force.point", ex.force.point, n)
+    for k, p in enumerate(deck.output.points or [], start=1):
+        problems += _dimension_of(f"output.points[{k}].point", p.point, n)
+    rayleigh = deck.damping.rayleigh if deck.damping is not None else None
+    if n == 2 and rayleigh is not None and rayleigh.modes is not None:
+        problems += [f"damping.rayleigh.modes[{i}]: Input should be less than or equal to 3"
+                     for i, m in enumerate(rayleigh.modes, start=1) if m > 3]
+    return problems
+
+
 def output_problems(deck: Deck) -> list[str]:
     """Point names used twice (ignoring case: they name files)."""
     problems, seen = [], {}
@@ -694,8 +812,8 @@ def vertex_reference_problems(body: Body, part: int | None, vertex: int) -> list
     if body.parts is None:
         if part is not None:
             return ["part: the body has no parts: `vertex` alone counts body.vertices"]
-        if vertex > len(body.vertices):
-            return [f"vertex: {vertex} is out of range: the body has {len(body.vertices)} vertices"]
+        if vertex > _vertex_count(body):
+            return [f"vertex: {vertex} is out of range: the body has {_vertex_count(body)} vertices"]
         return []
     n = len(body.parts)
     if part is None:
@@ -704,10 +822,15 @@ def vertex_reference_problems(body: Body, part: int | None, vertex: int) -> list
         part = 1
     if part > n:
         return [f"part: {part} is out of range: the body has {n} part{'s' if n > 1 else ''}"]
-    nv = len(body.parts[part - 1].vertices)
+    nv = _vertex_count(body.parts[part - 1])
     if vertex > nv:
         return [f"vertex: {vertex} is out of range: body.parts[{part}] has {nv} vertices"]
     return []
+
+
+def _vertex_count(shape) -> int:
+    """How many vertices a body or part has: those given, or a box's eight corners."""
+    return 8 if shape.vertices is None else len(shape.vertices)
 
 
 def check_runnable(deck: Deck) -> None:
@@ -797,7 +920,7 @@ def parse_deck(data: Any, need: tuple[str, ...] = ()) -> Deck:
         deck = Deck.model_validate(data)
     except ValidationError as err:
         raise InputError(_messages(err) + missing) from None
-    problems = missing + cross_references(deck) + output_problems(deck)
+    problems = missing + dimension_problems(deck) + cross_references(deck) + output_problems(deck)
     if problems:
         raise InputError(problems)
     return deck

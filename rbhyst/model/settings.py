@@ -27,8 +27,8 @@ class Settings:
     warn_error: float = 0.01
     #: estimate the error of the run (an adaptive solution at two tolerances)
     estimate: bool = True
-    #: output.points: (name, (x1, x2) in the deck's frame), in deck order
-    points: tuple[tuple[str, tuple[float, float]], ...] = ()
+    #: output.points: (name, (x1, x2) in the deck's frame; (x1, x2, x3) in space), in deck order
+    points: tuple[tuple[str, tuple[float, ...]], ...] = ()
     #: output.spectra: (dampings, periods in s) or None for no spectra
     spectra: tuple[tuple[float, ...], tuple[float, ...]] | None = None
 
@@ -57,6 +57,6 @@ def settings_from_deck(deck, integrator: str | None = None, dt: float | None = N
         tolerance=tolerance if tolerance is not None else a.tolerance,
         warn_error=a.warn_error,
         estimate=a.estimate_error,
-        points=tuple((p.name, (p.point[0], p.point[1])) for p in deck.output.points or ()),
+        points=tuple((p.name, tuple(p.point)) for p in deck.output.points or ()),
         spectra=None if deck.output.spectra is None else (deck.output.spectra.dampings, deck.output.spectra.periods),
     )

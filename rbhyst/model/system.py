@@ -35,7 +35,7 @@ class Excitation:
     p1: Signal | None = None
     p2: Signal | None = None
     m3: Signal | None = None
-    point: tuple[float, float] = (0.0, 0.0)  # where p1, p2 act, relative to G
+    point: tuple[float, ...] = (0.0, 0.0)  # where p1, p2 (p3) act, relative to G
     #: a load that does not vary (n,): the weight, once the static equilibrium under it is known;
     #: None: zero
     constant: tuple[float, ...] | None = None
@@ -44,6 +44,11 @@ class Excitation:
     #: support acceleration along its influence vector r (as -M r), a force or moment along its
     #: generalized force (eq. 13); None: those of the seed's plane body with the forces at ``point``
     directions: dict[str, tuple[float, ...]] | None = None
+    # a body in space: support motion along x3, a force along x3, moments about x1 and x2
+    ag3: Signal | None = None
+    p3: Signal | None = None
+    m1: Signal | None = None
+    m2: Signal | None = None
 
     def __post_init__(self):
         if self.directions is None:
@@ -59,12 +64,13 @@ class Excitation:
 
     @property
     def has_support(self) -> bool:
-        return self.ag1 is not None or self.ag2 is not None
+        return self.ag1 is not None or self.ag2 is not None or self.ag3 is not None
 
     @property
     def signals(self) -> dict[str, Signal]:
         return {k: s for k, s in (("ag1", self.ag1), ("ag2", self.ag2), ("p1", self.p1), ("p2", self.p2),
-                                  ("m3", self.m3)) if s is not None}
+                                  ("m3", self.m3), ("ag3", self.ag3), ("p3", self.p3), ("m1", self.m1),
+                                  ("m2", self.m2)) if s is not None}
 
     def acts_before(self, t_end: float) -> bool:
         """Whether any signal is non-zero somewhere in [0, t_end)."""
@@ -190,7 +196,7 @@ class Excitation:
 
 
 #: the signals that act on the body as external forces (not support motion)
-FORCE_SIGNALS = ("p1", "p2", "m3")
+FORCE_SIGNALS = ("p1", "p2", "m3", "p3", "m1", "m2")
 
 
 def load_directions(coordinates, point=(0.0, 0.0)) -> dict[str, tuple[float, ...]]:
@@ -220,23 +226,32 @@ def load_directions(coordinates, point=(0.0, 0.0)) -> dict[str, tuple[float, ...
 class Element:
     """One [[elements]] entry as the user wrote it; ``row`` is its row in the kernel arrays."""
 
-    x: tuple[float, float]  # attachment point relative to G, m
-    angle_deg: float
+    x: tuple[float, ...]  # attachment point relative to G, m (three coordinates in space)
+    angle_deg: float | None  # in the plane; None in space
     hysteresis: str
     count: int
     row: int
     stroke: tuple[float, float] | None = None  # (lower, upper) deformation it can take, m
+    direction: tuple[float, float, float] | None = None  # in space: the unit line of action
+
+    @property
+    def line(self) -> str:
+        """Its line of action as a user reads it: '90 deg' in the plane, '(0, 0, 1)' in space."""
+        if self.direction is None:
+            return f"{self.angle_deg:g} deg"
+        return "(" + ", ".join(f"{d + 0.0:.4g}" for d in self.direction) + ")"
 
 
 @dataclass(frozen=True)
 class Damper:
     """One [[dampers]] entry: a linear viscous damper along ``angle_deg`` at x (relative to G)."""
 
-    x: tuple[float, float]
-    angle_deg: float
+    x: tuple[float, ...]
+    angle_deg: float | None  # in the plane; None in space
     c: float  # N s/m, each
     count: int
     b: tuple[float, ...]  # its deformation is b . q (eqs. 5-8), its force acts back as b f
+    direction: tuple[float, float, float] | None = None  # in space: the unit line of action
 
 
 @dataclass(frozen=True)
@@ -336,6 +351,11 @@ class System:
     #: (ne,) each row's d_e . r_e, the offset of its body point along its line of action: with
     #: exact kinematics u_e = b1 u1 + b2 u2 + b3 sin(theta3) + c_e (cos(theta3) - 1)
     axial: np.ndarray | None = None
+    #: (n, n) orthogonal, or None (the identity): q in the deck's axes is ``frame @ q`` of the
+    #: kernels. A body in space whose inertia tensor about G is not diagonal runs in its
+    #: principal axes, where M is diagonal (rbhyst.model.space); its rows, loads and masses
+    #: here are the kernels', and history.Layout writes every output in the deck's axes
+    frame: np.ndarray | None = None
 
     def __post_init__(self):
         n = len(self.mass)
@@ -366,8 +386,15 @@ class System:
         return len(self.mass)
 
     def point_matrix(self, x) -> np.ndarray:
-        """T(x) (translations, n): the motion of the body point x (m, from G) is T q (eqs. 7-8)."""
-        return point_matrix(x, self.coordinates)
+        """T(x) (translations, n): the motion of the body point x (m, from G) is T q (eqs. 7-8),
+        q in the kernels' coordinates (the deck's unless the body turned to its principal axes)."""
+        t = point_matrix(x, self.coordinates)
+        return t if self.frame is None else t @ self.frame
+
+    def to_deck(self, q: np.ndarray) -> np.ndarray:
+        """(..., n) coordinates (or generalized forces: the frame is orthogonal) of the kernels in
+        the deck's axes."""
+        return q if self.frame is None else np.asarray(q) @ self.frame.T
 
     @property
     def K0(self) -> np.ndarray:
@@ -630,6 +657,10 @@ def assemble(deck: dk.Deck, base: Path, run: bool = True) -> System:
     ``run=False``: the body on its elements alone (what its modes need), without the excitation
     and without asking for an analysis section."""
     _check_sections(deck, run)
+    if deck.body.dimensions == 3:
+        from rbhyst.model.space import assemble_space
+
+        return assemble_space(deck, base, run)
     body, notes = body_from_deck(deck.body)
     mass = np.array([body.mass, body.mass, body.inertia])
 

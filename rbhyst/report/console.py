@@ -25,7 +25,8 @@ def element_table(summary: dict, all_up_to: int = ALL_UP_TO, shown: int = SHOWN)
         rows.append({
             "label": f"e{k}" if n == 1 else f"e{k}-e{k + n - 1} (each)",
             "set": el["hysteresis"],
-            "angle": el["angle_deg"],
+            "angle": el.get("angle_deg"),
+            "direction": el.get("direction"),
             "f": peaks[f"e{k}_f_N"],
             "u": stroke["peak_deformation_m"] if stroke else (u["max"] if abs(u["max"]) >= abs(u["min"]) else u["min"]),
             "limits": stroke["limits_m"] if stroke else None,
@@ -43,12 +44,14 @@ def element_table(summary: dict, all_up_to: int = ALL_UP_TO, shown: int = SHOWN)
         more = 0
     kn = max(r["f"] for r in rows) >= 1e3
     strokes = any(r["limits"] is not None for r in rows)
-    header = ["element", "set", "angle [deg]", f"peak |f| [{'kN' if kn else 'N'}]", "peak u [mm]"]
+    space = any(r["direction"] is not None for r in rows)
+    header = ["element", "set", "direction" if space else "angle [deg]", f"peak |f| [{'kN' if kn else 'N'}]", "peak u [mm]"]
     if strokes:
         header += ["stroke [mm]", "used"]
     table = [header]
     for r in rows:
-        cells = [r["label"], r["set"], f"{r['angle']:g}", f"{r['f'] * (1e-3 if kn else 1.0):.4g}",
+        line = ("(" + ", ".join(f"{d + 0.0:.3g}" for d in r["direction"]) + ")") if space else f"{r['angle']:g}"
+        cells = [r["label"], r["set"], line, f"{r['f'] * (1e-3 if kn else 1.0):.4g}",
                  f"{r['u'] * 1e3:+.4g}"]
         if strokes:
             if r["limits"] is None:

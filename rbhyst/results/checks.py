@@ -51,19 +51,24 @@ def gravity_checks(result: Result) -> tuple[list[str], list[str]]:
     system = result.system
     st = system.static
     w = system.weight
-    g = np.asarray(w[:2], dtype=float) / system.body.mass
-    gmag = float(np.hypot(*g))
+    coords = system.coordinates
+    moving = [j for j, c in enumerate(coords) if not c.rotation]
+    spin = [j for j, c in enumerate(coords) if c.rotation]
+    q = system.to_deck(st.q) if hasattr(system, "to_deck") else st.q
+    g = np.asarray(w[moving], dtype=float) / system.body.mass
+    gmag = float(np.linalg.norm(g))
     size = system.body.extent
-    notes = [f"body.gravity: the weight {float(np.hypot(*w[:2])):.6g} N rests on the elements at u1 = {st.q[0]:.4g} m, "
-             f"u2 = {st.q[1]:.4g} m, theta3 = {st.q[2]:.4g} rad (the static preload; time_history.csv is measured "
-             "from there)"]
+    at = ", ".join(f"{c.key('d')} = {x:.4g} {c.d[1]}" for c, x in zip(coords, q))
+    notes = [f"body.gravity: the weight {float(np.linalg.norm(w[moving])):.6g} N rests on the elements at {at} "
+             "(the static preload; time_history.csv is measured from there)"]
     warnings = []
     if gmag > 0 and abs(gmag / STANDARD_GRAVITY - 1.0) > GRAVITY_SPREAD:
         warnings.append(f"body.gravity: |g| = {gmag:.6g} m/s2 is {gmag / STANDARD_GRAVITY:.4g} times the standard "
                         f"{STANDARD_GRAVITY} m/s2 (rbhyst takes it in m/s2: was it given in mm/s2 or cm/s2?)")
-    shift = float(np.hypot(st.q[0], st.q[1]))
-    if shift > size or abs(st.q[2]) > STATIC_ROTATION_WARN:
-        warnings.append(f"body.gravity: the static deflection under the weight is {shift:.4g} m and {abs(st.q[2]):.4g} rad, "
+    shift = float(np.linalg.norm(q[moving]))
+    turn = float(np.linalg.norm(q[spin])) if spin else 0.0
+    if shift > size or turn > STATIC_ROTATION_WARN:
+        warnings.append(f"body.gravity: the static deflection under the weight is {shift:.4g} m and {turn:.4g} rad, "
                         f"against a body of {size:.4g} m: beyond what the elements' sets and the seed's small "
                         "rotations describe; check body.gravity, body.mass and the sets' stiffness")
     u = system.expand(st.st[None, :, 0])[0]
@@ -106,7 +111,8 @@ def unresolved_signals(result: Result) -> list[str]:
 
 #: a signal's place in the deck
 SIGNAL_KEYS = {"ag1": "excitation.support.x1", "ag2": "excitation.support.x2", "p1": "excitation.force.p1",
-               "p2": "excitation.force.p2", "m3": "excitation.force.m3"}
+               "p2": "excitation.force.p2", "m3": "excitation.force.m3", "ag3": "excitation.support.x3",
+               "p3": "excitation.force.p3", "m1": "excitation.force.m1", "m2": "excitation.force.m2"}
 
 
 def stroke_warnings(result: Result) -> list[str]:

@@ -81,10 +81,14 @@ def _to_length(key: str, system: System) -> float:
     rotation or angular acceleration (sqrt(J / m), the rotation's mass over the first
     translation's), its inverse for a moment."""
     coords = system.coordinates
-    mass = next((system.mass[j] for j, c in enumerate(coords) if not c.rotation), None)
+    masses = system.mass
+    frame = getattr(system, "frame", None)
+    if frame is not None:  # the columns are in the deck's axes: the diagonal of M there
+        masses = np.einsum("ij,j,ij->i", frame, system.mass, frame)
+    mass = next((masses[j] for j, c in enumerate(coords) if not c.rotation), None)
     for j, c in enumerate(coords):
         if c.rotation and mass is not None and key in (c.key("d"), c.key("at"), c.key("R")):
-            rg = math.sqrt(system.mass[j] / mass)
+            rg = math.sqrt(masses[j] / mass)
             return 1.0 / rg if key == c.key("R") else rg
     return 1.0
 

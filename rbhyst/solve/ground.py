@@ -27,9 +27,9 @@ FINE_POINTS = 400
 
 
 def ground_spectra(excitation, t_end: float, dampings, periods) -> LocatedSpectra:
-    """Spectra of every support acceleration of ``excitation`` over [0, t_end] (those it has, x1 then x2)."""
+    """Spectra of every support acceleration of ``excitation`` over [0, t_end] (those it has, x1, x2, then x3)."""
     labels, parts, record_dt = [], [], []
-    for k, signal in ((1, excitation.ag1), (2, excitation.ag2)):
+    for k, signal in ((1, excitation.ag1), (2, excitation.ag2), (3, excitation.ag3)):
         if signal is None:
             continue
         if isinstance(signal, Series):

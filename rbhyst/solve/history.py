@@ -70,8 +70,10 @@ class Layout:
         self._moving = translations(coords)
         if self.has_support:
             self._axes = tuple(coords[i].axis for i in self._moving)
-            self.slices["ag"] = slice(len(names), len(names) + len(self._axes))
-            names += [f"ag{k}_m_s2" for k in self._axes]
+            # the horizontal axes always, x3 (vertical in space) where it has a signal
+            self._shown = [c for c, k in enumerate(self._axes) if k < 3 or f"ag{k}" in ex.signals]
+            self.slices["ag"] = slice(len(names), len(names) + len(self._shown))
+            names += [f"ag{self._axes[c]}_m_s2" for c in self._shown]
         self.slices["R"] = slice(len(names), len(names) + n)
         names += columns(coords, "R")
         g = np.asarray(system.body.mass_centre, dtype=float)
@@ -107,6 +109,9 @@ class Layout:
         self._rc = system.kernel_axial * system.mult
         self._minv = 1.0 / np.asarray(system.mass, dtype=float)
         self._ct = system.C.T.copy() if self.damped else None
+        # a body that runs in its principal axes: its rows are turned back to the deck's
+        frame = getattr(system, "frame", None)
+        self._back = None if frame is None else np.asarray(frame, dtype=float).T.copy()
 
     def index(self, name: str) -> int:
         return self.names.index(name)
@@ -135,13 +140,17 @@ class Layout:
         if self.damped:
             at -= raw.v @ self._ct
         at *= self._minv
+        if self._back is not None:
+            for family in ("d", "v", "R", "at"):
+                block = out[:, self.slices[family]]
+                block[:] = block @ self._back
         rel = out[:, self.slices["a"]]
         rel[:] = at
         if self.has_support:
             ag = self.system.excitation.support(raw.t, self._axes)
             for c, i in enumerate(self._moving):
                 rel[:, i] -= ag[:, c]
-            out[:, self.slices["ag"]] = ag
+            out[:, self.slices["ag"]] = ag if len(self._shown) == len(self._axes) else ag[:, self._shown]
         first = self.slices["points"].start
         for k, (_, x) in enumerate(self.points):
             c = first + self._point_width * k

@@ -43,6 +43,19 @@ def kinematics_summary(result, settings) -> dict:
     i = e.names.index(key)
     theta = max(abs(start + e.max[i]), abs(start + e.min[i]))
     out["max_rotation_rad"] = theta
+    spins = [j for j, c in enumerate(system.coordinates) if c.rotation]
+    if len(spins) > 1:  # a body in space: no exact twin to measure against yet
+        start_q = system.to_deck(system.static.q) if system.static is not None else np.zeros(system.n)
+        theta = 0.0
+        for j in spins:
+            i = e.names.index(system.coordinates[j].column("d"))
+            theta = max(theta, abs(start_q[j] + e.max[i]), abs(start_q[j] + e.min[i]))
+        out["max_rotation_rad"] = theta
+        out["difference"] = None
+        out["bound"] = theta / 2
+        out["method"] = ("not computed: exact rotations are not built in for a 3-D body yet; bound = theta_max / 2, "
+                         "about the largest share of a point's motion the neglected terms can be")
+        return out
     if system.kinematics == "exact":
         out["difference"] = None
         out["method"] = "exact rotations: no kinematic error"
@@ -150,6 +163,10 @@ def kinematics_warning(kinematics: dict | None, warn_error: float) -> list[str]:
         return [f"the seed's small rotations (eqs. 7-8) differ from exact kinematics by {worst['difference']:.2%} in "
                 f"{worst['column']}{also}, above analysis.warn_error = {warn_error:g}; the body turns by up to "
                 f"{theta:.3g} rad: set analysis.kinematics = \"exact\""]
+    if kinematics.get("bound", 0.0) > warn_error:
+        return [f"the small rotations neglect terms of about theta^2 / 2 = {kinematics['bound']:.2%} of a point's "
+                f"motion (the body turns by up to {theta:.3g} rad), above analysis.warn_error = {warn_error:g}; "
+                "exact rotations are not built in for a 3-D body yet"]
     neglected = kinematics.get("neglected") or {}
     if neglected.get("share", 0.0) > warn_error:
         return [f"the terms the seed's small rotations (eqs. 7-8) neglect reach {neglected['share']:.2%} of "

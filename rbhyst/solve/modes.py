@@ -115,7 +115,16 @@ def element_stiffness(system, k: np.ndarray) -> np.ndarray:
 
 def initial_modes(system) -> Modes:
     """The modes of (M, K0): each element's k0, the slope of its limiting curves at u = 0."""
-    return modes_of(system.mass, element_stiffness(system, system.k0), coordinate_names(system), INITIAL)
+    return modes_of(*in_deck_axes(system, element_stiffness(system, system.k0)), coordinate_names(system), INITIAL)
+
+
+def in_deck_axes(system, k: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(M, K) in the deck's axes: a body that runs in its principal axes (System.frame) has its
+    shapes in the deck's coordinates, as every output."""
+    frame = getattr(system, "frame", None)
+    if frame is None:
+        return system.mass, k
+    return (frame * system.mass) @ frame.T, frame @ k @ frame.T
 
 
 def tangent_at_rest(system) -> np.ndarray:
@@ -149,7 +158,7 @@ def at_rest_modes(system) -> Modes | None:
     """The modes of (M, Kt) at the static equilibrium under gravity; None without gravity."""
     if system.weight is None:
         return None
-    return modes_of(system.mass, tangent_at_rest(system), coordinate_names(system), AT_REST)
+    return modes_of(*in_deck_axes(system, tangent_at_rest(system)), coordinate_names(system), AT_REST)
 
 
 def modes_summary(system) -> dict:

@@ -408,7 +408,8 @@ def _element_name(system: System, row: int) -> str:
     el = next(el for el in system.elements if el.row == row)
     g = system.body.mass_centre
     span = ("element " if len(numbers) == 1 else "elements ") + ", ".join(f"e{k}" for k in numbers)
-    return f"{span} ({el.hysteresis!r} at ({el.x[0] + g[0]:.4g}, {el.x[1] + g[1]:.4g}) m, {el.angle_deg:g} deg)"
+    where = ", ".join(f"{x + c:.4g}" for x, c in zip(el.x, g))
+    return f"{span} ({el.hysteresis!r} at ({where}) m, {el.line})"
 
 
 #: an exponential term that has grown beyond e^this has left any calibrated range

@@ -157,7 +157,7 @@ class Result:
             "title": system.title,
             "body": body_summary(system.body),
             "elements": self._elements_summary(),
-            **({"dampers": [{"x_m": list(dp.x), "angle_deg": dp.angle_deg, "c_N_s_m": dp.c, "count": dp.count}
+            **({"dampers": [{"x_m": list(dp.x), **_line(dp), "c_N_s_m": dp.c, "count": dp.count}
                             for dp in system.dampers]} if system.dampers else {}),
             **({"rayleigh": system.rayleigh.summary()} if getattr(system, "rayleigh", None) is not None else {}),
             **({"static": self._static_summary()} if system.static is not None else {}),
@@ -202,7 +202,7 @@ class Result:
         system, e = self.system, self.extremes
         out, k = [], 1
         for el in system.elements:
-            entry = {"x_m": list(el.x), "angle_deg": el.angle_deg, "hysteresis": el.hysteresis,
+            entry = {"x_m": list(el.x), **_line(el), "hysteresis": el.hysteresis,
                      "count": el.count, "k0_N_m": float(system.k0[el.row]),
                      "k_reversal_N_m": float(system.k_reversal[el.row])}
             if el.stroke is not None:
@@ -215,7 +215,8 @@ class Result:
         st = self.system.static
         u = self.system.expand(st.st[None, :, 0])[0]
         f = self.system.expand(st.st[None, :, 1])[0]
-        return {**{c.column("d"): float(q) for c, q in zip(self.system.coordinates, st.q)},
+        q = self.system.to_deck(st.q) if hasattr(self.system, "to_deck") else st.q
+        return {**{c.column("d"): float(x) for c, x in zip(self.system.coordinates, q)},
                 "elements": [{"u_m": float(a), "f_N": float(b)} for a, b in zip(u, f)],
                 "out_of_balance": st.residual, "iterations": st.iterations,
                 "note": "displacements in time_history.csv are measured from here; element deformations are total"}
@@ -248,6 +249,13 @@ class Result:
         import pandas as pd
 
         return pd.DataFrame(self._rows(), columns=list(self.columns))
+
+
+def _line(entry) -> dict:
+    """An element's or damper's line of action in summary.json: ``angle_deg`` in the plane,
+    ``direction`` (unit) in space."""
+    direction = getattr(entry, "direction", None)
+    return {"angle_deg": entry.angle_deg} if direction is None else {"direction": list(direction)}
 
 
 def stroke_use(extremes: Extremes, column: str, limits: tuple[float, float]) -> dict:
