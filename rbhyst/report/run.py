@@ -136,11 +136,12 @@ def _line(ax, result: Result, name: str, **kw) -> None:
 
 @styled
 def plot_excitation(result: Result, path: Path) -> None:
-    """Support acceleration along x1 and x2 (seed Fig. 5)."""
-    fig, axes = subplots(2, 1, figsize=(8, 4.5), sharex=True)
-    for k, ax in enumerate(axes):
-        _line(ax, result, f"ag{k + 1}_m_s2", lw=0.7, color="C0")
-        ax.set_ylabel(f"ag{k + 1} [m/s²]")
+    """Support acceleration along x1 and x2 (seed Fig. 5), and x3 where a body in space has it."""
+    names = [c for c in result.columns if c.startswith("ag") and c.endswith("_m_s2")]
+    fig, axes = subplots(len(names), 1, figsize=(8, 2.25 * len(names)), sharex=True)
+    for name, ax in zip(names, axes):
+        _line(ax, result, name, lw=0.7, color="C0")
+        ax.set_ylabel(f"{name[:-5]} [m/s²]")
     axes[0].set_title("Support acceleration")
     axes[-1].set_xlabel("time [s]")
     save(fig, path, TIME_MARGINS)
@@ -151,10 +152,29 @@ RESPONSE = (("u1_m", "at1_m_s2", "u1 [m]", "at1 [m/s²]", "mass centre along x1"
             ("theta3_rad", "alphat3_rad_s2", "θ3 [rad]", "θt3'' [rad/s²]", "rotation about x3"))
 
 
+def response_rows(coordinates) -> list[tuple[str, str, str, str, str]]:
+    """(displacement column, total acceleration column, their labels, what the coordinate is) of
+    each coordinate of q: RESPONSE for the plane body."""
+    out = []
+    for c in coordinates:
+        if c.rotation:
+            out.append((c.column("d"), c.column("at"), f"θ{c.axis} [rad]", f"θt{c.axis}'' [rad/s²]",
+                        f"rotation about x{c.axis}"))
+        else:
+            out.append((c.column("d"), c.column("at"), f"u{c.axis} [m]", f"at{c.axis} [m/s²]",
+                        f"mass centre along x{c.axis}"))
+    return out
+
+
+def response_files(coordinates) -> list[str]:
+    """response_x1.png, ..., response_theta3.png: one per coordinate of q."""
+    return [f"response_{'theta' if c.rotation else 'x'}{c.axis}.png" for c in coordinates]
+
+
 @styled
 def plot_response(result: Result, k: int, path: Path) -> None:
     """Relative displacement and total acceleration of coordinate k (seed Figs. 6-8)."""
-    d, at, d_label, at_label, name = RESPONSE[k]
+    d, at, d_label, at_label, name = response_rows(result.system.coordinates)[k]
     fig, axes = subplots(2, 1, figsize=(8, 4.5), sharex=True)
     _line(axes[0], result, d, lw=0.8, color="C0")
     axes[0].set_ylabel(d_label)
@@ -167,16 +187,18 @@ def plot_response(result: Result, k: int, path: Path) -> None:
 
 @styled
 def plot_point(result: Result, name: str, path: Path) -> None:
-    """Relative displacement and total acceleration of a point of interest along x1 and x2."""
+    """Relative displacement and total acceleration of a point of interest along x1 and x2 (and x3
+    in space)."""
     x = dict(result.layout.points)[name] + result.system.body.mass_centre
-    rows = ((f"{name}_u1_m", "u1 [m]", "C0"), (f"{name}_u2_m", "u2 [m]", "C0"),
-            (f"{name}_at1_m_s2", "at1 [m/s²]", "C1"), (f"{name}_at2_m_s2", "at2 [m/s²]", "C1"))
-    fig, axes = subplots(4, 1, figsize=(8, 7), sharex=True)
+    axes_of = [c.axis for c in result.system.coordinates if not c.rotation]
+    rows = ([(f"{name}_u{k}_m", f"u{k} [m]", "C0") for k in axes_of]
+            + [(f"{name}_at{k}_m_s2", f"at{k} [m/s²]", "C1") for k in axes_of])
+    fig, axes = subplots(len(rows), 1, figsize=(8, 1.75 * len(rows)), sharex=True)
     for ax, (column, label, colour) in zip(axes, rows):
         _line(ax, result, column, lw=0.7, color=colour)
         ax.set_ylabel(label)
     axes[0].set_title(f"Relative displacement and total acceleration: point {name} "
-                      f"({x[0]:.4g}, {x[1]:.4g}) m")
+                      f"({', '.join(f'{c:.4g}' for c in x)}) m")
     axes[-1].set_xlabel("time [s]")
     save(fig, path, TIME_MARGINS)
 
@@ -198,7 +220,8 @@ def plot_element_loops(result: Result, path: Path):
     for i, el in enumerate(system.elements):
         ax = axes.flat[i]
         label = f"e{k + 1}" if el.count == 1 else f"e{k + 1}-e{k + el.count} (each)"
-        ax.set_title(f"{label}: {el.hysteresis}, {el.angle_deg:g}°", fontsize=8)
+        line = f"{el.angle_deg:g}°" if el.direction is None else el.line
+        ax.set_title(f"{label}: {el.hysteresis}, {line}", fontsize=8)
         if peak_f[i] < NEGLIGIBLE * top:  # a panel of rounding noise would look like a loop
             ax.text(0.5, 0.5, f"at rest: |f| at most {peak_f[i]:.1e} N,\nbelow 1e-9 of the largest: rounding",
                     ha="center", va="center", fontsize=7.5, color="0.35", transform=ax.transAxes)
@@ -262,10 +285,15 @@ def write_plots(result: Result, out: Path) -> list[str]:
 
     from rbhyst.report.parallel import draw_all
 
-    jobs = {"model.png": partial(plot_body, result, out / "model.png")}
+    if len(result.system.coordinates) == 6:
+        from rbhyst.report.model3d import plot_body_3d
+
+        jobs = {"model.png": partial(plot_body_3d, result, out / "model.png")}
+    else:
+        jobs = {"model.png": partial(plot_body, result, out / "model.png")}
     if result.layout.has_support:
         jobs["support_motion.png"] = partial(plot_excitation, result, out / "support_motion.png")
-    for k, name in enumerate(("response_x1.png", "response_x2.png", "response_theta3.png")):
+    for k, name in enumerate(response_files(result.system.coordinates)):
         jobs[name] = partial(plot_response, result, k, out / name)
     for name, _ in result.layout.points:
         jobs[f"response_{name}.png"] = partial(plot_point, result, name, out / f"response_{name}.png")
