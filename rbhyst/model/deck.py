@@ -135,11 +135,25 @@ class Body(_Model):
     parts: Annotated[list[Part], Field(min_length=1)] | None = None
     mass_centre: Point | None = None
     #: J_x3 about the mass centre (kg m2) in the plane; in space the 3 x 3 tensor about it
-    inertia: PosFloat | Annotated[list[Annotated[list[float], Field(min_length=3, max_length=3)]],
-                                  Field(min_length=3, max_length=3)] | None = None
+    inertia: float | list[list[float]] | None = None
     #: the acceleration of gravity in the deck's frame (m/s2): the weight m g acts at G and the
     #: run starts from the static equilibrium under it (see README, "Gravity preload")
     gravity: Point | None = None
+
+    @field_validator("inertia", mode="before")
+    @classmethod
+    def _inertia(cls, v):
+        """A positive number (the plane's J_x3) or a 3 x 3 table of numbers (in space: whether it is
+        symmetric positive definite is rbhyst.model.solid's to say, with its numbers)."""
+        if _number(v):
+            if not (v > 0 and np.isfinite(v)):
+                raise ValueError("Input should be greater than 0")
+            return float(v)
+        if (isinstance(v, list) and len(v) == 3 and all(isinstance(r, list) and len(r) == 3 for r in v)
+                and all(_number(x) and np.isfinite(x) for r in v for x in r)):
+            return [[float(x) for x in r] for r in v]
+        raise ValueError(f"{v!r} must be a positive number (J_x3 about the mass centre, kg m2, in the plane) or "
+                         "the 3 x 3 tensor about it (in space)")
 
     @model_validator(mode="after")
     def _one_form(self):
@@ -424,7 +438,9 @@ class Analysis(_Model):
 
 
 #: names a point may not take (case aside): G's own plots and spectra, the ground's spectra
-RESERVED_POINT_NAMES = ("G", "ground", "x1", "x2", "x3", "theta1", "theta2", "theta3")
+RESERVED_POINT_NAMES = ("G", "ground", "x1", "x2", "theta3")
+#: ... and in space (dimension_problems)
+RESERVED_IN_SPACE = ("x3", "theta1", "theta2")
 _POINT_NAME = re.compile(r"[A-Za-z0-9_]+")
 
 
@@ -624,11 +640,13 @@ KEY_UNITS: dict[tuple[str, ...], str] = {
     ("body", "mass"): "kg", ("body", "inertia"): "kg m²", ("body", "vertices"): "m",
     ("body", "mass_centre"): "m", ("body", "gravity"): "m/s²",
     ("body", "parts", "mass"): "kg", ("body", "parts", "vertices"): "m",
+    ("body", "box", "size"): "m", ("body", "box", "centre"): "m",
+    ("body", "parts", "box", "size"): "m", ("body", "parts", "box", "centre"): "m",
     **{("hysteresis", "*", "*", name): unit for name, unit in (
         ("kb", "N/m"), ("f0", "N"), ("alpha", "1/m"), ("beta1", "N"), ("beta2", "1/m"), ("gamma1", "N"),
         ("gamma2", "1/m"), ("gamma3", "m"))},
     **{(group, name): unit for group in ("elements", "dampers") for name, unit in (
-        ("angle_deg", "°"), ("point", "m"), ("count", ""), ("vertex", ""), ("part", ""))},
+        ("angle_deg", "°"), ("point", "m"), ("count", ""), ("vertex", ""), ("part", ""), ("direction", ""))},
     ("elements", "stroke"): "m", ("dampers", "c"): "N s/m",
     **{(*group, "*", name): unit for group in (("excitation", "support"), ("excitation", "force"))
        for name, unit in (("amplitude", "signal"), ("scale", ""), ("frequency_hz", "Hz"), ("phase_deg", "°"),
@@ -783,6 +801,10 @@ def dimension_problems(deck: Deck) -> list[str]:
         problems += _dimension_of("excitation.force.point", ex.force.point, n)
     for k, p in enumerate(deck.output.points or [], start=1):
         problems += _dimension_of(f"output.points[{k}].point", p.point, n)
+        if n == 3 and p.name.lower() in RESERVED_IN_SPACE:
+            problems.append(f"output.points[{k}].name: {p.name!r} is taken by rbhyst's own outputs "
+                            f"({', '.join(RESERVED_POINT_NAMES[:4] + RESERVED_IN_SPACE + RESERVED_POINT_NAMES[4:])}: "
+                            "the mass centre's plots, the ground's spectra): choose another")
     rayleigh = deck.damping.rayleigh if deck.damping is not None else None
     if n == 2 and rayleigh is not None and rayleigh.modes is not None:
         problems += [f"damping.rayleigh.modes[{i}]: Input should be less than or equal to 3"
