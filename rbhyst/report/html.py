@@ -22,8 +22,8 @@ REPORT_FILE = "report.html"
 G = ACCEL_UNITS["g"]  # m/s2 (a g column beside m/s2 only; every value in m/s2 is summary.json's)
 
 #: a run's figures in the order the report shows them (others the folder lists follow)
-RUN_FIGURES = ("support_motion.png", "response_x1.png", "response_x2.png", "response_theta3.png",
-               "element_loops.png", "energy.png", "spectra.png")
+RUN_FIGURES = ("support_motion.png", "response_x1.png", "response_x2.png", "response_x3.png", "response_theta1.png",
+               "response_theta2.png", "response_theta3.png", "element_loops.png", "energy.png", "spectra.png")
 SWEEP_FIGURES = ("ida.png", "vary.png", "motions.png")
 #: the peaks a sweep's statistics table shows (all are in stats.csv)
 SWEEP_PEAKS = ("peak_u1_m", "peak_u2_m", "peak_theta3_rad", "peak_at1_m_s2", "peak_at2_m_s2")
@@ -278,7 +278,7 @@ def run_report(folder: Path, owned: set[str]) -> str:
     cells.append(f"<div><b>integrator</b>{esc(an.get('integrator', ''))}</div>")
     glance("dt", an.get("dt_s"), "analysis.dt_s", unit="s")
     glance("duration", an.get("duration_s"), "analysis.duration_s", unit="s")
-    for c in ("u1_m", "u2_m", "theta3_rad", "at1_m_s2", "at2_m_s2"):
+    for c in ("u1_m", "u2_m", "u3_m", "theta1_rad", "theta2_rad", "theta3_rad", "at1_m_s2", "at2_m_s2", "at3_m_s2"):
         if c in peaks:
             name, unit = _unit(c)
             glance(f"peak |{name}|", peaks[c], f"peaks.{c}", unit=unit)
@@ -352,10 +352,17 @@ def _model(folder: Path, owned: set[str], s: dict) -> str:
     if "model.png" in owned and (folder / "model.png").is_file():
         out.append(figure(folder, "model.png", "The body, its elements and dampers (model.png)"))
     b = s.get("body", {})
-    rows = [["form", b.get("form", "")], ["mass [kg]", num(b.get("mass_kg"), f"{src}:body.mass_kg")],
-            ["J about G [kg m2]", num(b.get("inertia_kgm2"), f"{src}:body.inertia_kgm2")]]
+    rows = [["form", b.get("form", "")], ["mass [kg]", num(b.get("mass_kg"), f"{src}:body.mass_kg")]]
+    space = isinstance(b.get("inertia_kgm2"), list)  # a body in space: the tensor about G
+    if space:
+        rows += [[f"J{i + 1}{j + 1} about G [kg m2]", num(b["inertia_kgm2"][i][j], f"{src}:body.inertia_kgm2.{i}.{j}")]
+                 for i in range(3) for j in range(i, 3)]
+    else:
+        rows.append(["J about G [kg m2]", num(b.get("inertia_kgm2"), f"{src}:body.inertia_kgm2")])
     if "area_m2" in b:
         rows.append(["area [m2]", num(b["area_m2"], f"{src}:body.area_m2")])
+    if "volume_m3" in b:
+        rows.append(["volume [m3]", num(b["volume_m3"], f"{src}:body.volume_m3")])
     for i, c in enumerate(b.get("mass_centre_m", [])):
         rows.append([f"mass centre G, x{i + 1} [m] (deck frame)", num(c, f"{src}:body.mass_centre_m.{i}")])
     out.append(table(["body", ""], rows))
@@ -364,25 +371,24 @@ def _model(folder: Path, owned: set[str], s: dict) -> str:
         p = f"{src}:elements.{i}"
         label = f"e{k}" if e["count"] == 1 else f"e{k}-e{k + e['count'] - 1}"
         st = e.get("stroke")
-        rows.append([label, e["hysteresis"], str(e["count"]), num(e["x_m"][0], f"{p}.x_m.0"),
-                     num(e["x_m"][1], f"{p}.x_m.1"), num(e["angle_deg"], f"{p}.angle_deg"),
+        rows.append([label, e["hysteresis"], str(e["count"]), *_place(e, p),
                      num(e["k0_N_m"], f"{p}.k0_N_m"), num(e["k_reversal_N_m"], f"{p}.k_reversal_N_m"),
                      num(st["limits_m"][0], f"{p}.stroke.limits_m.0") if st else num(None, ""),
                      num(st["limits_m"][1], f"{p}.stroke.limits_m.1") if st else num(None, "")])
         k += e["count"]
-    out.append("<h3>Elements</h3>" + table(["elements", "set", "count", "x1 [m] from G", "x2 [m] from G",
-                                            "angle [deg]", "k0 [N/m]", "k at reversal [N/m]", "stroke lower [m]",
-                                            "stroke upper [m]"], rows, set(range(3, 10))))
+    where = _place_heads(space)
+    out.append("<h3>Elements</h3>" + table(["elements", "set", "count", *where, "k0 [N/m]", "k at reversal [N/m]",
+                                            "stroke lower [m]", "stroke upper [m]"], rows,
+                                           set(range(3, 7 + len(where)))))
     if s.get("dampers"):
         rows, k = [], 1
         for i, d in enumerate(s["dampers"]):
             p = f"{src}:dampers.{i}"
             label = f"d{k}" if d["count"] == 1 else f"d{k}-d{k + d['count'] - 1}"
-            rows.append([label, str(d["count"]), num(d["x_m"][0], f"{p}.x_m.0"), num(d["x_m"][1], f"{p}.x_m.1"),
-                         num(d["angle_deg"], f"{p}.angle_deg"), num(d["c_N_s_m"], f"{p}.c_N_s_m")])
+            rows.append([label, str(d["count"]), *_place(d, p), num(d["c_N_s_m"], f"{p}.c_N_s_m")])
             k += d["count"]
-        out.append("<h3>Dampers</h3>" + table(["dampers", "count", "x1 [m] from G", "x2 [m] from G", "angle [deg]",
-                                               "c [N s/m]"], rows, {2, 3, 4, 5}))
+        out.append("<h3>Dampers</h3>" + table(["dampers", "count", *where, "c [N s/m]"], rows,
+                                               set(range(2, 3 + len(where)))))
     r = s.get("rayleigh")
     if r:
         rows = [[f"mode {i + 1}", num(f, f"{src}:rayleigh.mode_frequencies_hz.{i}"),
@@ -396,10 +402,26 @@ def _model(folder: Path, owned: set[str], s: dict) -> str:
     st = s.get("static")
     if st:
         out.append("<h3>Static preload under gravity</h3>" + table(["", ""], [
-            ["u1 [m]", num(st["u1_m"], f"{src}:static.u1_m")], ["u2 [m]", num(st["u2_m"], f"{src}:static.u2_m")],
-            ["theta3 [rad]", num(st["theta3_rad"], f"{src}:static.theta3_rad")]]))
+            [f"{_unit(c)[0]} [{_unit(c)[1]}]", num(st[c], f"{src}:static.{c}")]
+            for c in ("u1_m", "u2_m", "u3_m", "theta1_rad", "theta2_rad", "theta3_rad") if c in st]))
     out.append("</section>")
     return "".join(out)
+
+
+def _place(entry: dict, path: str) -> list[str]:
+    """An element's or damper's point from G and its line: x1, x2, angle in the plane; x1, x2,
+    x3 and the direction's d1, d2, d3 in space."""
+    cells = [num(x, f"{path}.x_m.{i}") for i, x in enumerate(entry["x_m"])]
+    if "direction" in entry:
+        return cells + [num(d, f"{path}.direction.{i}") for i, d in enumerate(entry["direction"])]
+    return cells + [num(entry["angle_deg"], f"{path}.angle_deg")]
+
+
+def _place_heads(space: bool) -> list[str]:
+    """The headings of :func:`_place`'s cells."""
+    if space:
+        return ["x1 [m] from G", "x2 [m] from G", "x3 [m] from G", "d1", "d2", "d3"]
+    return ["x1 [m] from G", "x2 [m] from G", "angle [deg]"]
 
 
 def _extreme_rows(s: dict, columns: list[str], g_column: bool) -> list[list[str]]:
@@ -425,8 +447,9 @@ def _peaks(s: dict) -> str:
     out = ['<section class="page"><h2>Peaks and extremes</h2>',
            "<p>Over every step of dt (whatever output.every keeps). Accelerations are total (what an "
            "accelerometer reads); the g column is the m/s2 value divided by 9.80665.</p>"]
-    body = [c for c in ("u1_m", "u2_m", "theta3_rad", "at1_m_s2", "at2_m_s2", "alphat3_rad_s2", "R1_N", "R2_N",
-                        "R3_Nm", "ag1_m_s2", "ag2_m_s2") if c in peaks]
+    body = [c for c in ("u1_m", "u2_m", "u3_m", "theta1_rad", "theta2_rad", "theta3_rad", "at1_m_s2", "at2_m_s2",
+                        "at3_m_s2", "alphat1_rad_s2", "alphat2_rad_s2", "alphat3_rad_s2", "R1_N", "R2_N", "R3_N",
+                        "R3_Nm", "R4_Nm", "R5_Nm", "R6_Nm", "ag1_m_s2", "ag2_m_s2", "ag3_m_s2") if c in peaks]
     out.append("<h3>The body at G, the mounts' resultant, the support</h3>"
                + table(head, _extreme_rows(s, body, True), set(range(1, 7))))
     # elements: one row per element of the CSV, with its entry's stroke utilization
