@@ -138,6 +138,15 @@ def modes(
         typer.echo(line)
 
 
+def plane_only(d, command: str, why: str) -> None:
+    """One error line where a command built for the plane gets a deck in space."""
+    from rbhyst.errors import InputError
+
+    if d.body is not None and d.body.dimensions == 3:
+        raise InputError(f"body: `rbhyst {command}` is built for a plane (2-D) deck ({why}); this deck is in space "
+                         "(3-D): see the README, Three dimensions")
+
+
 def run_line(result) -> str:
     """The console's one line on a run: method, steps, time, peak displacements and accelerations."""
     from rbhyst.model.deck import ACCEL_UNITS
@@ -354,6 +363,7 @@ def study(
 
     with user_errors():
         d = load_deck(deck)
+        plane_only(d, "study", "it measures u1, u2 and theta3")
         settings = settings_from_deck(d)
         names = _split_list(integrators, "--integrators")
         names = check_integrators(names if names is not None else fixed_step_names())
@@ -620,6 +630,7 @@ def transmissibility(
 
     with user_errors():
         d = load_deck(deck)
+        plane_only(d, "transmissibility", "its motion is along x1 or x2")
         amplitudes = _split_list(amplitude, "--amplitude", float)
         freqs = frequency_list(_split_list(frequencies, "--frequencies", float), f_from, f_to, count)
         problems = request_problems(direction, amplitudes, freqs)  # (in the units given)
@@ -811,6 +822,7 @@ def qualify(
 
     with user_errors():
         d = load_deck(deck, need=ANALYSIS_SECTIONS)
+        plane_only(d, "qualify", "its motions and limits are along x1 and x2")
         req = request(d, {"standard": standard, "sds": sds, "z_over_h": z_over_h, "level": level, "rrs": rrs,
                           "rrs_x2": rrs_x2,
                           "rrs_damping": rrs_damping, "motions": motions, "seed": seed, "duration": duration,

@@ -99,6 +99,9 @@ def load_sweep(path: str | Path) -> Sweep:
     deck = base.deck()
     motions = sweep_motions(spec, here)
     own = not motions
+    if not own and deck.body is not None and deck.body.dimensions == 3:
+        raise InputError(f"motions: the deck {spec.deck} is in space (3-D) and [[motions]] give x1 and x2 only "
+                         "(its x3 motion would be dropped): sweep its own motion with [scale] and [vary]")
     if own:
         motions = [SweepMotion(DECK_MOTION, deck_support(deck), "deck")]
     kind = spec.scale.kind if spec.scale is not None else "factors"
@@ -108,7 +111,7 @@ def load_sweep(path: str | Path) -> Sweep:
     digests = FileDigests()
     problems = []
     for m in motions:  # every file named must exist before anything runs
-        for c in ("x1", "x2"):
+        for c in ("x1", "x2", "x3"):
             comp = (m.support or {}).get(c)
             for key in ("file", "psd"):  # a record, a random signal's PSD file
                 if comp and isinstance(comp.get(key), str):
