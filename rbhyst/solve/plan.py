@@ -289,6 +289,8 @@ class _FixedStepPlan(Plan):
 
         s = self.settings
         ne, n_q = self.bvec.shape
+        if n > len(buf.d):  # the compiled loop checks no bounds: never let it write past a buffer
+            raise RuntimeError(f"a chunk of {n} rows does not fit its buffers of {len(buf.d)}")
         self.info = np.zeros(kernels.INFO_SIZE)
         # M and M^-1 as tuples: their length n is then a constant of the compiled loop (one
         # compilation per n), which unrolls every loop over the coordinates
@@ -313,7 +315,10 @@ class _FixedStepPlan(Plan):
         system, s = self.system, self.settings
         ne, n = self.bvec.shape
         x, st = self._state()
-        buf = _Buffers(self.chunk, ne, n)
+        fine = s.spectra is not None
+        # a chunk of compute-step rows holds at least one output step's substeps (a pulse far
+        # shorter than dt splits one step into more rows than a chunk of a short run has)
+        buf = _Buffers(max(self.chunk, int(self.substeps.max())) if fine else self.chunk, ne, n)
         rows = Rows(self.layout, self.n_steps, s.every, keep, csv, spectra=s.spectra, dt=s.dt,
                     compare_every=compare_every)
         start_row = Raw(t=np.zeros(1), d=x[None, x_slice(n, 0)].copy(), v=np.zeros((1, n)),
@@ -321,7 +326,7 @@ class _FixedStepPlan(Plan):
                         e=np.zeros((1, kernels.N_E)))
         # the spectra see every compute step where the excitation is split (a short pulse's
         # response between the rows); nothing else does, and without spectra no row is made
-        fine = rows.spectra is not None
+        assert fine == (rows.spectra is not None)
         wall = 0.0
         try:
             rows.add(start_row)
