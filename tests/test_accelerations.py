@@ -289,3 +289,20 @@ def test_the_estimate_of_a_very_accurate_run_is_its_error(tmp_path, seed):
     assert res.accuracy["status"] == "estimated" and max(truth) < 1e-3
     for key, true in zip(keys, truth):
         assert 0.5 * true <= res.accuracy["estimated_error"][key] <= 2.0 * true, (seed, key, true)
+
+
+def test_a_pulse_split_into_more_substeps_than_the_run_has_rows(tmp_path):
+    """Ten steps of 20 ms and a 5.5 ms half-sine: the step it falls on is split into some 150
+    compute steps, which the spectra see one by one, more rows than a chunk of so short a run
+    holds. The buffers take them all (the compiled loop checks no bounds: once it wrote past
+    them and corrupted the heap), and the peak is the fine run's."""
+    data = pulse_deck("half-sine", start=0.1, duration=0.0055)
+    data["analysis"] = {"dt": 0.02, "duration": 0.2}
+    data["output"] = {"spectra": {"damping": [0.05], "periods_s": [0.01, 0.1]}}
+    coarse = rbhyst.run(write_deck(tmp_path, data), estimate=False)
+    data["analysis"] = {"dt": 0.0001, "duration": 0.2}
+    fine = rbhyst.run(write_deck(tmp_path, data, name="fine"), estimate=False)
+    for key in ("u2_m", "v2_m_s"):  # on the coarse run's rows (its peaks see only those)
+        want = fine.column(key)[::200]
+        assert np.max(np.abs(coarse.column(key) - want)) < 0.02 * np.max(np.abs(want)), key
+    assert coarse.spectra.sa("G", "x2").max() == pytest.approx(fine.spectra.sa("G", "x2").max(), rel=0.02)

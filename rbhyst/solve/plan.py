@@ -17,6 +17,7 @@ from rbhyst.solve.kernels import layout as kernels
 from rbhyst.errors import AnalysisError, InputError, byte_size
 from rbhyst.solve.history import Extremes, Layout, PlotData, Raw, body_spectrum_columns, estimate_columns
 from rbhyst.solve.kernels.layout import N_STATE, N_W, X_CUR, X_ITER, X_LEVEL_USED, X_OMEGA_DT2, X_STEPS, X_SUBSTEPS, n_x, x_slice
+from rbhyst.model.kinematics import turned_loads
 from rbhyst.model.system import System
 from rbhyst.solve.result import Result, RunStats
 from rbhyst.solve.static import at_rest_under_gravity
@@ -272,8 +273,11 @@ class _FixedStepPlan(Plan):
         # first moves, so the monitor sees a stiff body at rest before the first step that moves it
         for e in range(ne):
             st[0, e, kernels.K] = max(virgin_tangent(self.params[e], 1.0), virgin_tangent(self.params[e], -1.0))
-        p0 = self.system.excitation.load(np.zeros(1), self.system.mass)[0]
         static = self.system.static
+        q0 = static.q if static is not None else np.zeros(n)
+        rot = self.system.rotation_index
+        p0 = turned_loads(self.system.excitation.load(np.zeros(1), self.system.mass), q0[rot:rot + 1] if rot >= 0
+                          else np.zeros(1), n, rot)[0]
         if static is not None:  # at rest at the static equilibrium under gravity, its branches as the path left them
             st[0] = static.st
             x[x_slice(n, 0)] = static.q
@@ -289,6 +293,8 @@ class _FixedStepPlan(Plan):
 
         s = self.settings
         ne, n_q = self.bvec.shape
+        if n > len(buf.d):  # the compiled loop checks no bounds: never let it write past a buffer
+            raise RuntimeError(f"a chunk of {n} rows does not fit its buffers of {len(buf.d)}")
         self.info = np.zeros(kernels.INFO_SIZE)
         # M and M^-1 as tuples: their length n is then a constant of the compiled loop (one
         # compilation per n), which unrolls every loop over the coordinates
@@ -313,7 +319,10 @@ class _FixedStepPlan(Plan):
         system, s = self.system, self.settings
         ne, n = self.bvec.shape
         x, st = self._state()
-        buf = _Buffers(self.chunk, ne, n)
+        fine = s.spectra is not None
+        # a chunk of compute-step rows holds at least one output step's substeps (a pulse far
+        # shorter than dt splits one step into more rows than a chunk of a short run has)
+        buf = _Buffers(max(self.chunk, int(self.substeps.max())) if fine else self.chunk, ne, n)
         rows = Rows(self.layout, self.n_steps, s.every, keep, csv, spectra=s.spectra, dt=s.dt,
                     compare_every=compare_every)
         start_row = Raw(t=np.zeros(1), d=x[None, x_slice(n, 0)].copy(), v=np.zeros((1, n)),
@@ -321,7 +330,7 @@ class _FixedStepPlan(Plan):
                         e=np.zeros((1, kernels.N_E)))
         # the spectra see every compute step where the excitation is split (a short pulse's
         # response between the rows); nothing else does, and without spectra no row is made
-        fine = rows.spectra is not None
+        assert fine == (rows.spectra is not None)
         wall = 0.0
         try:
             rows.add(start_row)
