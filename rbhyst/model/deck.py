@@ -384,9 +384,16 @@ def _support_signal():
     ]
 
 
-class Support(_Model):
+class PlaneSupport(_Model):
+    """Support motion along x1 and x2 (a sweep's motions)."""
+
     x1: _support_signal() | None = None
     x2: _support_signal() | None = None
+
+
+class Support(PlaneSupport):
+    """A deck's support motion: along x1, x2 and, in space, x3."""
+
     x3: _support_signal() | None = None  # in space only
 
 

@@ -12,13 +12,13 @@ from typing import Annotated, Any, Literal
 
 from pydantic import Field, ValidationError, field_validator, model_validator
 
-from rbhyst.model.deck import AccelUnits, PosFloat, Support, _key_problems, _messages, _Model, read_mapping
+from rbhyst.model.deck import AccelUnits, PlaneSupport, PosFloat, _key_problems, _messages, _Model, read_mapping
 from rbhyst.errors import InputError
 
 Name = Annotated[str, Field(min_length=1, pattern=r"^[^\x00-\x1f\x7f]+$")]
 
 
-class Motion(Support):
+class Motion(PlaneSupport):
     """One support motion: it replaces the deck's ``excitation.support`` (x1, x2 as there)."""
 
     name: Name
