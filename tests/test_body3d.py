@@ -346,3 +346,24 @@ def test_commands_built_for_the_plane_refuse_a_deck_in_space(tmp_path):
     errors = [line for line in out.splitlines() if line.startswith("error:")]
     assert code == 2 and len(errors) == 1 and "`rbhyst study` is built for a plane (2-D) deck" in errors[0], out
     assert not (tmp_path / "study").exists()
+
+
+def test_a_body_of_parts_in_space_is_their_parallel_axis_sum():
+    """Two boxes as [[body.parts]] (one given by its vertices) are the one box they make up; a
+    vertex of the second part is found by part and vertex."""
+    data = rbhyst.load_deck(DECKS / "cabinet_3d.toml").model_dump(mode="python", exclude_unset=True)
+    data.pop("excitation")
+    data["analysis"]["duration"] = 1.0
+    data["body"] = {"parts": [{"box": {"size": [0.8, 0.6, 1.0], "centre": [0.4, 0.3, 0.5]}, "mass": 275.0},
+                              {"vertices": [list(v) for v in box_vertices([0.8, 0.6, 1.0], [0.4, 0.3, 1.5])],
+                               "mass": 275.0}]}
+    for el in data["elements"]:
+        el["part"] = 1
+    data["elements"][0].update(part=2, vertex=8)  # the second box's top corner 4: (0, 0.6, 2)
+    system = assemble(parse_deck(data), DECKS)
+    whole = polyhedron(box_vertices([0.8, 0.6, 2.0], [0.4, 0.3, 1.0]))
+    assert system.body.form == "parts" and system.body.mass == 550.0
+    np.testing.assert_allclose(system.body.mass_centre, whole.centroid, atol=1e-12)
+    np.testing.assert_allclose(system.body.inertia, whole.inertia(550.0), rtol=0, atol=1e-12 * 550.0)
+    np.testing.assert_allclose(system.elements[0].x, np.array([0.0, 0.6, 2.0]) - whole.centroid, atol=1e-12)
+    assert system.frame is None  # a box's tensor is diagonal: nothing turns

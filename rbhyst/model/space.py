@@ -37,13 +37,27 @@ def unit(direction) -> np.ndarray:
     return d / np.linalg.norm(d)
 
 
+#: products of inertia below this share of the largest moment are rounding (a box's computed
+#: from its hull's tetrahedra carries some 1e-16): the tensor counts as diagonal
+DIAGONAL = 1e-12
+
+
 def principal_frame(inertia: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
-    """(the diagonal of J in the kernels' axes, the frame diag(I, P) or None where J is diagonal
-    as given). P's columns are the principal axes, right-handed (det P = +1)."""
+    """(the diagonal of J in the kernels' axes, the frame diag(I, P) or None where J is diagonal as
+    given, to within DIAGONAL). P's columns are the principal axes, each the one nearest a deck
+    axis in turn and pointing along it where it can, right-handed (det P = +1)."""
     j = np.asarray(inertia, dtype=float)
-    if not np.any(j - np.diag(np.diag(j))):
+    off = j - np.diag(np.diag(j))
+    if not np.any(np.abs(off) > DIAGONAL * float(np.max(np.abs(np.diag(j))))):
         return np.diag(j).copy(), None
-    lam, p = np.linalg.eigh(j)
+    lam, vec = np.linalg.eigh(j)
+    order, free = [], [0, 1, 2]
+    for axis in range(3):  # the principal axis nearest x1, then x2's among the rest
+        k = max(free, key=lambda c: abs(vec[axis, c]))
+        order.append(k)
+        free.remove(k)
+    lam, p = lam[order], vec[:, order]
+    p = p * np.where(np.diag(p) < 0.0, -1.0, 1.0)
     if np.linalg.det(p) < 0.0:
         p[:, 2] = -p[:, 2]
     frame = np.eye(6)
