@@ -6,7 +6,6 @@ deck location (list indices count from 1, as vertices and elements do in the
 seed and in the CSV columns).
 """
 
-from __future__ import annotations
 
 import functools
 import re
