@@ -79,7 +79,10 @@ def _render(table, mant, expo, flag, buf, digits):
     cycles, ten of them a value were most of the time of a run's CSV); every digit is written,
     then the end is set after the last significant one: the same text as writing only those,
     with fewer branches. Writes run up to 17 bytes past a value's start, within the room that
-    the caller gives each value (MAX_WIDTH + 1)."""
+    the caller gives each value (MAX_WIDTH + 1).
+
+    Long because it is one compiled loop over every value: the cases of a value's text are
+    written in place rather than by calls, each of which would cost about as much as the text."""
     pos = 0
     for i in range(table.shape[0]):
         for j in range(table.shape[1]):
