@@ -1,16 +1,17 @@
 """rbhyst: nonlinear dynamics of 2D rigid bodies on Vaiana-Rosati hysteretic supports.
 
-The Python API (see README, "Python API"): ``load_deck``, ``run``, and the ``Result`` they give.
+The Python API (see README, "Python API"): ``load_deck``, ``run``, and the ``Result`` they give;
+``modes``, the body's natural frequencies and mode shapes.
 """
 
 from rbhyst._version import __version__
 
-__all__ = ["load_deck", "run", "InputError", "AnalysisError", "__version__"]
+__all__ = ["load_deck", "run", "modes", "InputError", "AnalysisError", "__version__"]
 
 
 def __getattr__(name):
     # the API is imported on first use: `import rbhyst` stays cheap for the command line
-    if name in ("load_deck", "run"):
+    if name in ("load_deck", "run", "modes"):
         from rbhyst import api
 
         return getattr(api, name)

@@ -19,7 +19,10 @@ from rbhyst.errors import InputError
 from rbhyst.model.deck import Deck, load_deck
 from rbhyst.solve.result import Result
 
-__all__ = ["load_deck", "run", "write"]
+__all__ = ["load_deck", "run", "write", "modes"]
+
+#: the sections the body's modes need
+MODES_SECTIONS = ("body", "elements")
 
 
 def run(deck: Deck | str | Path, integrator: str | None = None, dt: float | None = None,
@@ -67,6 +70,19 @@ def run(deck: Deck | str | Path, integrator: str | None = None, dt: float | None
     result.csv_path = Path(out) / "time_history.csv"
     result.writer = write
     return result
+
+
+def modes(deck: Deck | str | Path) -> dict:
+    """The undamped natural frequencies and mode shapes of a deck's body on its elements, without
+    running anything: exactly summary.json's ``modes`` (coordinates, frequencies_hz ascending,
+    shapes, stiffness; ``at_rest`` with the tangents at the static equilibrium under gravity).
+    Only [body], [hysteresis] and [[elements]] are needed; a mistake is an InputError, elements
+    that cannot carry the weight an AnalysisError."""
+    from rbhyst.model.system import assemble
+    from rbhyst.solve.modes import modes_summary
+
+    d = deck if isinstance(deck, Deck) else load_deck(deck, need=MODES_SECTIONS)
+    return modes_summary(assemble(d, d.base, run=False))
 
 
 def deck_as_run(deck: Deck, **overrides) -> dict:

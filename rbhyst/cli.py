@@ -99,12 +99,41 @@ def run(
             say(f"note: {note}")
     for warning in result.warnings:
         say(f"warning: {warning}")
-    say(run_line(result))
-    from rbhyst.report.console import element_table
+    from rbhyst.report.console import element_table, mode_table
 
-    for line in element_table(result.summary()):
+    summary = result.summary()
+    for line in mode_table(summary["modes"]):  # what the body is, then what it did
+        say(line)
+    say(run_line(result))
+    for line in element_table(summary):
         say(line)
     say(f"wrote {target}")
+
+
+@app.command(cls=Command)
+def modes(
+    deck: Annotated[Path, typer.Argument(help="TOML or YAML deck ([body], [hysteresis] and [[elements]] suffice).")],
+    as_json: Annotated[bool, typer.Option("--json", help="Print summary.json's modes as JSON instead of a table.")] = False,
+):
+    """Natural frequencies and mode shapes of the deck's body on its elements, without running it.
+
+    Of the initial system (M, K0) and, when the deck gives body.gravity, of the elements' tangents
+    at the static equilibrium under the weight. Undamped: dampers and Rayleigh damping do not
+    change them. Written to stdout; nothing is written to disk.
+    """
+    from rbhyst import api
+
+    with user_errors():
+        found = api.modes(deck)
+    if as_json:
+        import json
+
+        typer.echo(json.dumps(found, indent=2))
+        return
+    from rbhyst.report.console import mode_table
+
+    for line in mode_table(found):
+        typer.echo(line)
 
 
 def run_line(result) -> str:
@@ -679,14 +708,17 @@ RECORD_MARK = "# rbhyst make-record"
 def make_motion(
     out: Annotated[Path, typer.Argument(help="Folder to write: m1_x1.csv, m1_x2.csv, ..., trs.csv, trs.png, "
                                              "motions.json.")],
-    rrs: Annotated[Optional[str], typer.Option(help="ac156, or a CSV RRS for x1 (frequency_hz and a value column "
-                                                    "with its unit: sa_g, sa_m_s2).")] = None,
+    rrs: Annotated[Optional[str], typer.Option(help="ac156, ieee693, or a CSV RRS for x1 (frequency_hz and a value "
+                                                    "column with its unit: sa_g, sa_m_s2).")] = None,
     rrs_x2: Annotated[Optional[str], typer.Option("--rrs-x2", help="A CSV RRS for x2 (vertical), with an RRS "
                                                                    "file for x1.")] = None,
-    rrs_damping: Annotated[Optional[float], typer.Option(help="The damping ratio the RRS files are drawn for.")] = None,
+    rrs_damping: Annotated[Optional[float], typer.Option(help="The damping ratio the RRS files are drawn for "
+                                                              "(ieee693: 0.05 by default).")] = None,
     sds: Annotated[Optional[float], typer.Option(help="AC156: S_DS, in g.")] = None,
     z_over_h: Annotated[Optional[float], typer.Option(help="AC156: z/h, 0 at grade to 1 at the roof.")] = None,
-    duration: Annotated[float, typer.Option(help="Length in s (AC156: 30 s, 20 s of them strong motion).")] = 30.0,
+    level: Annotated[Optional[str], typer.Option(help="IEEE 693: the performance level, high or moderate.")] = None,
+    duration: Annotated[float, typer.Option(help="Length in s (AC156, IEEE 693: 30 s, 20 s of them strong "
+                                                 "motion).")] = 30.0,
     dt: Annotated[float, typer.Option(help="Sampling step in s.")] = 0.005,
     seed: Annotated[int, typer.Option(help="Random seed: the same seed gives the same motions.")] = 1,
     motions: Annotated[int, typer.Option(min=1, help="Number of motions (each with its own noise).")] = 1,
@@ -705,15 +737,15 @@ def make_motion(
     from rbhyst.files.outdir import staged_directory
 
     keys = {"rrs": "--rrs", "rrs_x2": "--rrs-x2", "damping": "--rrs-damping", "sds": "--sds", "z_over_h": "--z-over-h",
-            "duration": "--duration", "dt": "--dt"}
+            "level": "--level", "duration": "--duration", "dt": "--dt"}
     with user_errors():
-        spectra, standard = requested_rrs(rrs, rrs_x2, rrs_damping, sds, z_over_h, Path.cwd(), keys)
+        spectra, standard = requested_rrs(rrs, rrs_x2, rrs_damping, sds, z_over_h, Path.cwd(), keys, level)
         problems = matching.motion_problems(spectra, duration, dt, None, standard, keys)
         if problems:
             raise InputError(problems)
         made = matching.make_motions(spectra, motions, duration, dt, seed)
         options = {"--rrs": rrs, "--rrs-x2": rrs_x2, "--rrs-damping": rrs_damping, "--sds": sds,
-                   "--z-over-h": z_over_h, "--duration": duration, "--dt": dt, "--seed": seed}
+                   "--z-over-h": z_over_h, "--level": level, "--duration": duration, "--dt": dt, "--seed": seed}
         mark = f"{MOTION_MARK} " + " ".join(f"{k} {shlex.quote(str(v))}" for k, v in options.items() if v is not None)
         with staged_directory(out) as tmp:
             for m in made:
@@ -729,8 +761,9 @@ def make_motion(
                 plot_trs(made, spectra, tmp / "trs.png")
     for m in made:
         for axis, r in m.records.items():
+            least = "" if r.check.peak_min is None else f" (at least {r.check.peak_min / 9.80665:.3g} g)"
             say(f"motion {m.number} {axis}: TRS from {r.check.said()} at {len(r.check.frequency_hz)} frequencies "
-                f"({r.iterations} iterations); peak {float(abs(r.acc_g).max()):.3g} g")
+                f"({r.iterations} iterations); peak {float(abs(r.acc_g).max()):.3g} g{least}")
         if m.correlation is not None:
             say(f"motion {m.number}: correlation of x1 and x2 {m.correlation:+.3f}")
     say(f"wrote {out}")
@@ -744,12 +777,14 @@ MOTION_MARK = "# rbhyst make-motion"
 def qualify(
     deck: Annotated[Path, typer.Argument(help="TOML or YAML deck (x1 horizontal, x2 vertical), with a qualify "
                                               "section or the options below.")],
-    standard: Annotated[Optional[str], typer.Option(help="The required response spectrum: ac156.")] = None,
+    standard: Annotated[Optional[str], typer.Option(help="The required response spectrum: ac156 or ieee693.")] = None,
     sds: Annotated[Optional[float], typer.Option(help="AC156: S_DS, in g.")] = None,
     z_over_h: Annotated[Optional[float], typer.Option(help="AC156: z/h, 0 at grade to 1 at the roof.")] = None,
+    level: Annotated[Optional[str], typer.Option(help="IEEE 693: the performance level, high or moderate.")] = None,
     rrs: Annotated[Optional[str], typer.Option(help="A CSV RRS for x1 instead of a standard.")] = None,
     rrs_x2: Annotated[Optional[str], typer.Option("--rrs-x2", help="A CSV RRS for x2.")] = None,
-    rrs_damping: Annotated[Optional[float], typer.Option(help="The damping ratio the RRS files are drawn for.")] = None,
+    rrs_damping: Annotated[Optional[float], typer.Option(help="The damping ratio the RRS files are drawn for "
+                                                              "(ieee693: 0.05 by default).")] = None,
     motions: Annotated[Optional[str], typer.Option(help="How many motions to make, or 'deck' (its own "
                                                         "excitation.support).")] = None,
     seed: Annotated[Optional[int], typer.Option(help="Random seed of the motions.")] = None,
@@ -773,7 +808,8 @@ def qualify(
 
     with user_errors():
         d = load_deck(deck, need=ANALYSIS_SECTIONS)
-        req = request(d, {"standard": standard, "sds": sds, "z_over_h": z_over_h, "rrs": rrs, "rrs_x2": rrs_x2,
+        req = request(d, {"standard": standard, "sds": sds, "z_over_h": z_over_h, "level": level, "rrs": rrs,
+                          "rrs_x2": rrs_x2,
                           "rrs_damping": rrs_damping, "motions": motions, "seed": seed, "duration": duration,
                           "motion_dt": motion_dt})
         target = out if out is not None else _sibling_dir(d, deck, "-qualify")

@@ -42,6 +42,10 @@ def test_every_sample_deck_runs(deck, tmp_path):
         summary = json.loads((out / "summary.json").read_text())
         assert summary["analysis"]["steps"] > 0
         assert summary["energy"]["balance_error"] < 0.01
+        modes = summary["modes"]  # the body's modes, as `rbhyst modes` gives them
+        assert modes["coordinates"] == ["u1", "u2", "theta3"] and len(modes["shapes"]) == 3
+        assert 0.0 < modes["frequencies_hz"][0] <= modes["frequencies_hz"][1] <= modes["frequencies_hz"][2]
+        assert ("at_rest" in modes) == ("gravity" in data["body"])
         for png in ("model.png", "response_x1.png", "element_loops.png", "energy.png"):
             assert (out / png).stat().st_size > 10_000
     else:

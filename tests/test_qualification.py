@@ -1,6 +1,6 @@
-"""Qualification: AC156's RRS at its breakpoints, spectrum-compatible motions read back by
-``rbhyst spectrum``, random vibration against its PSD, and the verdict against the runs' own
-summary.json."""
+"""Qualification: AC156's and IEEE 693's RRS at their breakpoints, spectrum-compatible motions
+read back by ``rbhyst spectrum`` (their peak acceleration held to the standard's least), random
+vibration against its PSD, and the verdict against the runs' own summary.json."""
 
 from __future__ import annotations
 
@@ -16,7 +16,8 @@ import pytest
 from conftest import DECKS, invoke, snapshot, write_deck
 from rbhyst.analyses.qualification import matching
 from rbhyst.analyses.qualification.psd import load_psd, random_history, welch_check
-from rbhyst.analyses.qualification.rrs import ac156, ac156_levels, read_rrs, sixth_octave
+from rbhyst.analyses.qualification.rrs import (ac156, ac156_levels, ieee693, ieee693_beta, read_rrs,
+                                               sixth_octave)
 from rbhyst.errors import InputError
 from rbhyst.model.records import read_record
 
@@ -54,6 +55,78 @@ def test_ac156_shape_at_its_breakpoints(axis, flx, rig):
     # below 1.3 Hz the figure's line through A_FLX / 10 at 0.1 Hz: A_FLX (f / 1.3)^(ln 10 / ln 13)
     for f in (0.1, 0.5, 1.0):
         assert sa(f) == pytest.approx(flx * (f / 1.3) ** (math.log(10) / math.log(13)), rel=1e-12)
+
+
+def test_ieee693_beta_is_one_at_5_percent():
+    # Newmark and Hall's median amplification 3.21 - 0.68 ln(zeta %) over its value at 5 %
+    assert ieee693_beta(0.05) == (3.21 - 0.68 * math.log(5)) / 2.1156 == pytest.approx(1.0, abs=1e-5)
+    assert ieee693_beta(0.02) == pytest.approx(1.2945074, rel=1e-7)
+    assert ieee693_beta(0.10) == pytest.approx(0.7771990, rel=1e-6)
+
+
+@pytest.mark.parametrize("damping, beta", [(0.05, 0.99999160), (0.02, 1.29450743)])
+def test_ieee693_high_level_at_its_breakpoints(damping, beta):
+    r = ieee693("high", damping)
+    sa = lambda f: float(r["x1"](f)) / G  # noqa: E731
+    assert r["x1"].damping == damping and r["x1"].check_range == (1.1, 33.0) and r["x1"].band == (1.0, 1.3)
+    assert ieee693_beta(damping) == pytest.approx(beta, rel=1e-7)
+    beta = ieee693_beta(damping)
+    # below the lower corner 2.288 beta f; the plateau 2.5 beta from 1.1 to 8 Hz; the ZPA 1 g from 33 Hz
+    for f in (0.3, 0.5, 1.0, 1.09):
+        assert sa(f) == pytest.approx(2.288 * beta * f, rel=1e-7)
+    for f in (1.1, 3.0, 8.0):
+        assert sa(f) == pytest.approx(2.5 * beta, rel=1e-7)
+    for f in (33.0, 50.0, 100.0):
+        assert sa(f) == pytest.approx(1.0, rel=1e-15)
+    for f in (8.5, 15.0, 25.0):
+        assert sa(f) == pytest.approx((26.4 * beta - 10.56) / f - 0.8 * beta + 1.32, rel=1e-12)
+    # continuous at 8 Hz and 33 Hz whatever beta; at 1.1 Hz the formulas step by 0.7 % (2.288 x 1.1 = 2.5168)
+    assert sa(8.0 * (1 + 1e-9)) == pytest.approx(sa(8.0), rel=1e-8)
+    assert sa(33.0 * (1 - 1e-9)) == pytest.approx(1.0, rel=1e-8)
+    assert sa(1.1 * (1 - 1e-12)) / sa(1.1) == pytest.approx(2.288 * 1.1 / 2.5, rel=1e-9)
+
+
+def test_ieee693_moderate_is_half_the_high_and_the_vertical_80_percent():
+    f = np.geomspace(0.2, 80.0, 60)
+    for damping in (0.02, 0.05, 0.1):
+        high, moderate = ieee693("high", damping), ieee693("moderate", damping)
+        assert np.allclose(moderate["x1"](f), 0.5 * high["x1"](f), rtol=1e-15, atol=0)
+        for r in (high, moderate):
+            assert np.allclose(r["x2"](f), 0.8 * r["x1"](f), rtol=1e-15, atol=0)
+    # the moderate level at 5 %: 1.25 g plateau, 0.5 g ZPA; the high level at 5 %: 2.5 g, 1 g
+    assert float(ieee693("moderate")["x1"](4.0)) / G == pytest.approx(1.25, rel=1e-5)
+    assert float(ieee693("moderate")["x1"](40.0)) / G == pytest.approx(0.5, rel=1e-15)
+    assert [ieee693(level)[axis].peak_min / G for level in ("high", "moderate") for axis in ("x1", "x2")] == \
+        pytest.approx([1.0, 0.8, 0.5, 0.4], rel=1e-15)
+
+
+def test_ieee693_and_ac156_peak_checks_in_the_describe():
+    d = ieee693("high")["x2"].describe()
+    assert d["peak_min_ratio"] == 1.0 and d["peak_min_g"] == pytest.approx(0.8) and "Figure A.1" in d["source"]
+    d = ac156(1.0, 0.5)["x1"].describe()
+    assert d["peak_min_ratio"] == 0.9 and d["peak_min_g"] == pytest.approx(0.72)
+    assert read_rrs_describe_has_no_peak()
+
+
+def read_rrs_describe_has_no_peak() -> bool:
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "rrs.csv"
+        path.write_text("frequency_hz,sa_g\n1.0,0.5\n10.0,1.0\n")
+        d = read_rrs(path, 0.05).describe()
+    return d["peak_min_ratio"] is None and d["peak_min_g"] is None
+
+
+def test_a_record_short_of_its_least_peak_fails_the_check():
+    rrs = ac156(1.0, 0.5)["x1"]
+    f = sixth_octave(*rrs.check_range)
+    within = matching.Check(f, rrs(f), 1.1 * rrs(f), rrs.band, 0.89 * 0.8 * G, rrs.peak_min)
+    assert within.within.all() and not within.peak_ok and not within.ok
+    s = within.summary()
+    assert s["within_band"] and not s["peak_pass"] and not s["pass"] and s["peak_min_g"] == pytest.approx(0.72)
+    assert within.said_peak() == "its peak acceleration 0.712 g is below 0.72 g (0.9 times the RRS at 33.3 Hz)"
+    assert matching.Check(f, rrs(f), 1.1 * rrs(f), rrs.band, 0.91 * 0.8 * G, rrs.peak_min).ok
 
 
 def test_sixth_octave_points_cover_the_range():
@@ -134,6 +207,22 @@ def test_motions_end_at_rest_are_independent_and_strong_for_20_s(motion):
     assert all(a["trs"]["pass"] for a in facts["axes"].values())
 
 
+def test_the_ac156_motion_peaks_at_least_at_90_percent_of_a_rig(motion):
+    rrs = ac156(1.0, 0.5)
+    facts = json.loads((motion / "motions.json").read_text())["motions"][0]["axes"]
+    rows = np.genfromtxt(motion / "trs.csv", delimiter=",", names=True, dtype=None, encoding="utf-8")
+    for axis in ("x1", "x2"):
+        _, a = _acc_g(motion / f"m1_{axis}.csv")
+        least = 0.9 * float(rrs[axis](33.3)) / G
+        assert np.abs(a).max() >= least
+        t = facts[axis]["trs"]
+        assert t["peak_g"] == np.abs(a).max() and t["peak_min_g"] == pytest.approx(least) and t["peak_pass"]
+        assert 0.0 < facts[axis]["strong_part_ratio"] < 1.0
+        mine = rows[rows["axis"] == axis]
+        assert np.allclose(mine["peak_g"], np.abs(a).max(), rtol=1e-5) and set(mine["peak_within"]) == {"yes"}
+        assert np.allclose(mine["peak_min_g"], least, rtol=1e-5)
+
+
 def test_the_same_seed_gives_the_same_bits(motion, tmp_path):
     code, err = invoke("make-motion", tmp_path / "again", *AC156_OPTIONS, "--no-plots")
     assert code == 0, err
@@ -170,6 +259,36 @@ def test_make_motion_mistakes_are_one_line_each(tmp_path):
         "error: --sds: only with --rrs ac156",
         "error: --rrs-damping: required with an RRS file: the damping ratio it is drawn for (0.05 for 5 %)"]
     assert not (tmp_path / "m").exists()
+
+
+def test_an_ieee693_motion_envelops_its_rrs_and_peaks_at_its_zpa(tmp_path):
+    out = tmp_path / "ieee"
+    code, err = invoke("make-motion", out, "--rrs", "ieee693", "--level", "moderate", "--duration", "30",
+                       "--seed", "5", "--no-plots")
+    assert code == 0, err
+    rrs = ieee693("moderate")
+    f = sixth_octave(1.1, 33.0)
+    summary = json.loads((out / "motions.json").read_text())
+    assert summary["standard"] == "ieee693" and summary["rrs"]["x2"]["peak_min_g"] == pytest.approx(0.4)
+    for axis in ("x1", "x2"):
+        dt, a = _acc_g(out / f"m1_{axis}.csv")
+        check = matching.check_record(a * G, dt, rrs[axis])  # the file's digits, checked again
+        assert np.allclose(check.frequency_hz, f) and check.frequency_hz[0] == 1.1
+        assert np.all(check.ratio >= 1.0) and np.all(check.ratio <= 1.3), check.ratio
+        assert np.abs(a).max() >= float(rrs[axis](33.0)) / G  # the ZPA: 0.5 g, 0.4 g
+    strong = summary["motions"][0]["strong_motion_s"]
+    assert strong == 20.0
+    code, err = invoke("make-motion", tmp_path / "short", "--rrs", "ieee693", "--level", "high", "--duration", "25")
+    assert code == 2 and err.splitlines() == [
+        "error: --duration: 25 s: IEEE 693 asks for 20 s of strong motion (ramps of 5 s): --duration 30 or more"]
+    code, err = invoke("make-motion", tmp_path / "bad", "--rrs", "ieee693", "--level", "low", "--rrs-damping", "0.3",
+                       "--z-over-h", "0.5")
+    assert code == 2 and err.splitlines() == [
+        "error: --level: 'low': high or moderate",
+        "error: --rrs-damping: 0.3: IEEE 693's damping factor is used from 0.005 to 0.2 (0.05 by default, the "
+        "damping it is matched at)",
+        "error: --z-over-h: only with --rrs ac156"]
+    assert not (tmp_path / "short").exists() and not (tmp_path / "bad").exists()
 
 
 def test_a_user_rrs_is_matched_on_its_own_range(tmp_path):
@@ -287,7 +406,7 @@ def test_the_verdict_takes_its_demands_from_the_runs_summary(tmp_path):
 
     deck = DECKS / "cabinet_qualify.toml"  # the sample: strokes, a point at the top, [qualify]
     out = tmp_path / "q"
-    code, err = invoke("qualify", deck, "--out", out, "--motions", "2", "--seed", "2")
+    code, err = invoke("qualify", deck, "--out", out, "--motions", "2", "--seed", "4")
     assert code == 0, err
     assert err.splitlines()[-2].startswith("verdict: pass: 16 criteria, 16 within capacity; least margin ")
     q = json.loads((out / "qualification.json").read_text())
@@ -345,6 +464,41 @@ def test_the_decks_own_motion_is_checked_against_the_rrs(tmp_path):
     # the sample's synthetic records are no AC156 motion at 1 g: their TRS lies far below
     assert code == 1 and not q["trs"]["pass"] and q["motions"][0]["trs"]["x1"]["max_ratio"] < 0.9
     assert "fail: the motions' TRS is not within the RRS's band (trs.csv)" in err.splitlines()
+
+
+def test_qualify_against_ieee693_from_the_deck_and_the_command_line(tmp_path):
+    deck = _cabinet(tmp_path, {"standard": "ieee693", "level": "moderate", "seed": 3,
+                               "acceleration_limit_g": {"top": 3.0}})
+    code, err = invoke("qualify", deck, "--out", tmp_path / "q", "--no-plots")
+    q = json.loads((tmp_path / "q" / "qualification.json").read_text())
+    assert q["standard"] == "ieee693" and q["rrs"]["x1"]["check_range_hz"] == [1.1, 33.0]
+    assert q["trs"]["pass"] and q["trs"]["within_band"] and q["trs"]["peak_pass"]
+    assert q["trs"]["peak_min_g"] == {"x1": pytest.approx(0.5), "x2": pytest.approx(0.4)}
+    assert q["rrs"]["x2"]["source"] == "IEEE Std 693-2005, Figure A.2, vertical 80 %"
+    # --standard on the command line replaces the deck's spectrum, its level with it
+    code, err = invoke("qualify", deck, "--out", tmp_path / "q2", "--standard", "ac156", "--no-plots")
+    assert code == 2 and errors(err) == [
+        "error: qualify.sds: required with the AC156 spectrum (S_DS, the design spectral acceleration at short "
+        "periods, in g)",
+        "error: qualify.z_over_h: required with the AC156 spectrum (z/h, the attachment height over the roof height, "
+        "0 at grade to 1 at the roof)"]
+    for bad, lines in (
+            ({"standard": "ieee693", "level": "extreme"},
+             ["error: qualify.level: Input should be 'high' or 'moderate'"]),
+            ({"standard": "ieee693", "sds": 1.0, "rrs_damping": 0.5},
+             ["error: qualify.level: required with the IEEE 693 spectrum: high or moderate (its performance level)",
+              "error: qualify.rrs_damping: 0.5: IEEE 693's damping factor is used from 0.005 to 0.2 (0.05 by default, "
+              "the damping it is matched at)",
+              "error: qualify.sds: only with qualify.standard ac156"]),
+            ({"standard": "ac156", "sds": 1.0, "z_over_h": 0.5, "level": "high"},
+             ["error: qualify.level: only with qualify.standard ieee693"]),
+            ({"standard": "ieee693", "level": "high", "duration": 20.0},
+             ["error: qualify.duration: 20 s: IEEE 693 asks for 20 s of strong motion (ramps of 5 s): "
+              "qualify.duration 30 or more"])):
+        deck = _cabinet(tmp_path, {**bad, "acceleration_limit_g": {"top": 3.0}})
+        code, err = invoke("qualify", deck, "--out", tmp_path / "q3")
+        assert code == 2 and errors(err) == lines
+    assert not (tmp_path / "q3").exists()
 
 
 def test_qualify_mistakes_are_one_line_each_and_nothing_is_written(tmp_path):

@@ -368,6 +368,8 @@ class Analysis(_Model):
     warn_error: Annotated[float, Field(gt=0, lt=1)] = 0.01
     #: estimate every run's error (false skips it: a sweep that has checked its dt once)
     estimate_error: bool = True
+    #: the body's kinematics: the seed's small rotations (eqs. 7-8) or exact rotations of any size
+    kinematics: Literal["small", "exact"] = "small"
 
     @field_validator("integrator")
     @classmethod
@@ -475,9 +477,10 @@ class Qualify(_Model):
     """What ``rbhyst qualify`` holds the deck to (see README, "Qualification"): a required
     response spectrum (a standard's, or files), the motions, and the limits."""
 
-    standard: Literal["ac156"] | None = None
+    standard: Literal["ac156", "ieee693"] | None = None
     sds: PosFloat | None = None  # g, with standard = "ac156"
     z_over_h: Annotated[float, Field(ge=0, le=1)] | None = None
+    level: Literal["high", "moderate"] | None = None  # with standard = "ieee693": its performance level
     rrs: str | None = None  # a CSV RRS for x1 (horizontal), instead of a standard
     rrs_x2: str | None = None  # ... and for x2 (vertical)
     rrs_damping: Ratio | None = None

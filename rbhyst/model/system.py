@@ -331,6 +331,12 @@ class System:
     rayleigh: RayleighDamping | None = None
     #: what q is: the names and units of the coordinates and of the columns they head
     coordinates: tuple[Coordinate, ...] = PLANE
+    #: "small": the seed's kinematics (eqs. 7-8), u_e = b_e . q; "exact": a body point at r from
+    #: G is at x_G + R(theta3) r for any rotation (rbhyst.model.kinematics)
+    kinematics: str = "small"
+    #: (ne,) each row's d_e . r_e, the offset of its body point along its line of action: with
+    #: exact kinematics u_e = b1 u1 + b2 u2 + b3 sin(theta3) + c_e (cos(theta3) - 1)
+    axial: np.ndarray | None = None
 
     def __post_init__(self):
         n = len(self.mass)
@@ -339,6 +345,21 @@ class System:
         wrong = {k: v for k, v in sizes.items() if v != n}
         if wrong:
             raise ValueError(f"a System of {n} coordinates (mass) has {wrong}")
+        if self.kinematics not in ("small", "exact"):
+            raise ValueError(f"kinematics {self.kinematics!r}: 'small' or 'exact'")
+        if self.kinematics == "exact" and (self.axial is None or self.coordinates != PLANE):
+            raise ValueError("exact kinematics are built for the plane body, with each row's axial offset")
+
+    @property
+    def rotation_index(self) -> int:
+        """Where theta3 sits in q when the kinematics are exact; -1 (small rotations) tells the
+        compiled kernels to use the seed's linear rows u_e = b_e . q."""
+        return 2 if self.kinematics == "exact" else -1
+
+    @property
+    def kernel_axial(self) -> np.ndarray:
+        """(ne,) the rows' axial offsets for the kernels (zeros with small rotations, unused)."""
+        return np.ascontiguousarray(self.axial if self.axial is not None else np.zeros(len(self.bvec)), dtype=float)
 
     @property
     def n(self) -> int:
@@ -405,6 +426,12 @@ def b_vector(x1: float, x2: float, angle_rad: float) -> np.ndarray:
     """u_e = b . q for an element at (x1, x2) along angle a (eqs. 5-8 combined)."""
     c, s = math.cos(angle_rad), math.sin(angle_rad)
     return np.array([c, s, x1 * s - x2 * c])
+
+
+def axial_offset(x1: float, x2: float, angle_rad: float) -> float:
+    """d . r for an element at r = (x1, x2) from G along d = (cos a, sin a): with exact
+    kinematics, what the rotation's cos(theta3) - 1 multiplies in its deformation."""
+    return x1 * math.cos(angle_rad) + x2 * math.sin(angle_rad)
 
 
 def free_directions(bvec: np.ndarray, body: Body) -> list[str]:
@@ -540,9 +567,70 @@ def _excitation(deck: dk.Deck, base: Path, body: Body, notes: list[str]) -> Exci
     )
 
 
-def assemble(deck: dk.Deck, base: Path) -> System:
-    """Build the System of a runnable deck; relative file paths resolve against ``base``."""
-    dk.check_runnable(deck)
+def exact_limits(system) -> list[str]:
+    """What keeps a scene from exact kinematics (the deck keys, and why): nothing, mostly."""
+    problems = []
+    if system.dampers:
+        problems.append('dampers: viscous dampers with analysis.kinematics = "exact" are not built in (their '
+                        'deformation rate turns with the body): use damping.rayleigh, or kinematics = "small"')
+    ex = system.excitation
+    if any(abs(x) > 0.0 for x in ex.point) and (ex.p1 is not None or ex.p2 is not None):
+        problems.append('excitation.force.point: a force away from G with analysis.kinematics = "exact" is not '
+                        'built in (its moment arm turns with the body): give p1, p2 at G and the moment as m3, '
+                        'or kinematics = "small"')
+    return problems
+
+
+def _kernel_rows(deck: dk.Deck, body: Body, exact: bool):
+    """The elements as kernel rows: (rows b_e, their axial offsets, set names, multiplicities,
+    the Element entries in deck order). An element that deforms exactly like another with the
+    same set shares its row: the seed's shear isolators under P1 and P2 share b = (0, 1, x1)."""
+    xs, bs = [], []
+    for el in deck.elements:
+        x = body.vertex(el.part, el.vertex) if el.vertex is not None else np.asarray(el.point, float) - body.mass_centre
+        xs.append(x)
+        bs.append(b_vector(x[0], x[1], math.radians(el.angle_deg)))
+    b_all = np.array(bs)
+    # with exact kinematics two elements deform alike only if their points also lie alike along
+    # their line of action (d . r): the seed's shear isolators under P1 and P2 then part
+    c_all = np.array([axial_offset(x[0], x[1], math.radians(el.angle_deg)) for x, el in zip(xs, deck.elements)])
+    key_rows = np.column_stack([b_all, c_all]) if exact else b_all
+    key = np.round(key_rows / 1e-12).astype(np.int64)  # equal where they round alike at 1e-12 (a pair split only costs time)
+    set_ids = {name: i for i, name in enumerate(deck.hysteresis)}
+    key = np.column_stack([key, [set_ids[el.hysteresis] for el in deck.elements]])
+    _, first, inverse = np.unique(key, axis=0, return_index=True, return_inverse=True)
+    inverse = inverse.ravel()
+    order = np.argsort(first)  # rows in the order of their first element
+    row_of = np.empty(len(first), dtype=int)
+    row_of[order] = np.arange(len(first))
+    rows = [b_all[first[k]] for k in order]
+    axial = np.array([c_all[first[k]] for k in order])
+    names = [deck.elements[first[k]].hysteresis for k in order]
+    mult = [0] * len(rows)
+    elements = []
+    for i, el in enumerate(deck.elements):
+        row = int(row_of[inverse[i]])
+        mult[row] += el.count
+        elements.append(Element((float(xs[i][0]), float(xs[i][1])), el.angle_deg, el.hysteresis, el.count, row,
+                                el.stroke_limits))
+    return rows, axial, names, mult, elements
+
+
+def _check_sections(deck: dk.Deck, run: bool) -> None:
+    """A run needs a body, elements and an analysis (dk.check_runnable); the modes the first two."""
+    if run:
+        dk.check_runnable(deck)
+        return
+    missing = [f"{key}: required for the body's modes" for key in ("body", "elements") if getattr(deck, key) is None]
+    if missing:
+        raise InputError(missing)
+
+
+def assemble(deck: dk.Deck, base: Path, run: bool = True) -> System:
+    """Build the System of a runnable deck; relative file paths resolve against ``base``.
+    ``run=False``: the body on its elements alone (what its modes need), without the excitation
+    and without asking for an analysis section."""
+    _check_sections(deck, run)
     body, notes = body_from_deck(deck.body)
     mass = np.array([body.mass, body.mass, body.inertia])
 
@@ -555,38 +643,15 @@ def assemble(deck: dk.Deck, base: Path) -> System:
         k_rev[name] = k
         k_el[name] = max(float(limiting_slope(p, 1, 0.0)), float(limiting_slope(p, -1, 0.0)), 0.0)
 
-    # an element that deforms exactly like another with the same set shares its kernel row:
-    # the seed's shear isolators under P1 and P2 share b = (0, 1, x1)
-    xs, bs = [], []
-    for el in deck.elements:
-        x = body.vertex(el.part, el.vertex) if el.vertex is not None else np.asarray(el.point, float) - body.mass_centre
-        xs.append(x)
-        bs.append(b_vector(x[0], x[1], math.radians(el.angle_deg)))
-    b_all = np.array(bs)
-    key = np.round(b_all / 1e-12).astype(np.int64)  # equal where they round alike at 1e-12 (a pair split only costs time)
-    set_ids = {name: i for i, name in enumerate(deck.hysteresis)}
-    key = np.column_stack([key, [set_ids[el.hysteresis] for el in deck.elements]])
-    _, first, inverse = np.unique(key, axis=0, return_index=True, return_inverse=True)
-    inverse = inverse.ravel()
-    order = np.argsort(first)  # rows in the order of their first element
-    row_of = np.empty(len(first), dtype=int)
-    row_of[order] = np.arange(len(first))
-    rows = [b_all[first[k]] for k in order]
-    names = [deck.elements[first[k]].hysteresis for k in order]
-    mult = [0] * len(rows)
-    elements = []
-    for i, el in enumerate(deck.elements):
-        row = int(row_of[inverse[i]])
-        mult[row] += el.count
-        elements.append(Element((float(xs[i][0]), float(xs[i][1])), el.angle_deg, el.hysteresis, el.count, row,
-                                el.stroke_limits))
+    exact = deck.analysis is not None and deck.analysis.kinematics == "exact"
+    rows, axial, names, mult, elements = _kernel_rows(deck, body, exact)
     bvec = np.array(rows)
     notes.extend(implausible_geometry(body, elements))
     free = free_directions(bvec, body)
     if free:
         raise InputError(f"elements: the body is not restrained against {'; '.join(free)}")
 
-    excitation = _excitation(deck, base, body, notes)
+    excitation = _excitation(deck, base, body, notes) if run else Excitation()
     dampers = []
     for dp in deck.dampers or []:
         x = body.vertex(dp.part, dp.vertex) if dp.vertex is not None else np.asarray(dp.point, float) - body.mass_centre
@@ -599,7 +664,7 @@ def assemble(deck: dk.Deck, base: Path) -> System:
     weight = None
     if deck.body.gravity is not None:
         weight = body.mass * np.array([deck.body.gravity[0], deck.body.gravity[1], 0.0])
-    return System(
+    system = System(
         title=deck.title or "",
         body=body,
         mass=mass,
@@ -614,4 +679,9 @@ def assemble(deck: dk.Deck, base: Path) -> System:
         dampers=tuple(dampers),
         weight=weight,
         rayleigh=rayleigh,
+        kinematics="exact" if exact else "small",
+        axial=axial if exact else None,
     )
+    if exact and exact_limits(system):
+        raise InputError(exact_limits(system))
+    return system

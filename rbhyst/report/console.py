@@ -1,5 +1,6 @@
 """What `rbhyst run` prints about its elements: one aligned row per [[elements]] entry (identical
-elements in parallel, `count`, share one), from summary.json's numbers. Plain text, no matplotlib."""
+elements in parallel, `count`, share one), from summary.json's numbers; and the body's modes (what
+`rbhyst modes` prints too). Plain text, no matplotlib."""
 
 from __future__ import annotations
 
@@ -79,3 +80,28 @@ def element_table(summary: dict, all_up_to: int = ALL_UP_TO, shown: int = SHOWN)
 def _percent(used: float) -> str:
     text = f"{100 * used:.0f}%" if used >= 0.1 else f"{100 * used:#.2g}%"
     return text + " over" if used > 1.0 else text
+
+
+#: what each stiffness's table is headed with
+MODE_HEADINGS = {"initial": "modes of the initial system (K0 = sum k0 b b^T, undamped):",
+                 "tangent at rest under gravity": "modes at rest under gravity (the elements' tangents there, undamped):"}
+
+
+def mode_table(modes: dict) -> list[str]:
+    """The lines of the modes' tables for summary.json's ``modes`` (rbhyst.solve.modes): one row
+    per mode, its frequency and its shape (largest component +1), then its notes; the same for
+    ``at_rest`` where there is one."""
+    lines = []
+    for part in (modes, modes.get("at_rest")):
+        if not part:
+            continue
+        header = ["mode", "f [Hz]", *part["coordinates"]]
+        table = [header]
+        for j, (f, shape) in enumerate(zip(part["frequencies_hz"], part["shapes"]), start=1):
+            table.append([str(j), f"{f:#.4g}", *("0" if x == 0.0 else f"{round(x, 3) + 0.0:+.3f}" for x in shape)])
+        widths = [max(len(row[i]) for row in table) for i in range(len(header))]
+        lines.append(MODE_HEADINGS.get(part["stiffness"], f"modes ({part['stiffness']}):"))
+        for row in table:
+            lines.append("  " + "  ".join(c.rjust(w) for c, w in zip(row, widths)).rstrip())
+        lines.extend(f"  {note}" for note in part.get("notes", ()))
+    return lines

@@ -66,6 +66,10 @@ def analyse(system: System, settings: Settings, keep: bool = True, csv=None, pla
         note = unfinished_note(end, result.steps * result.settings.dt, periods, dampings)
         result.notes += [note] if note else []
     result.warnings += warnings_for(result.accuracy, result.settings, result.stats)
+    from rbhyst.solve.kinematic import kinematics_summary, kinematics_warning
+
+    result.kinematics = kinematics_summary(result, result.settings)
+    result.warnings += kinematics_warning(result.kinematics, result.settings.warn_error)
     return result
 
 

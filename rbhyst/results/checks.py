@@ -8,13 +8,6 @@ import numpy as np
 
 from rbhyst.solve.result import ENERGY_WARN, Result
 
-#: rotations above this (rad) leave the small-rotation kinematics of seed eqs. 7-8: a point at
-#: x from G moves by x theta to first order, and the neglected second-order terms (1 - cos
-#: theta) x ~ x theta^2 / 2 are theta / 2 of it: 2.5 % at 0.05 rad, beyond the 1 % accuracy
-#: rbhyst states for the integration itself
-ROTATION_WARN = 0.05
-
-
 def diagnose(result: Result) -> tuple[list[str], list[str]]:
     """Notes and warnings of a run, in the words the command line prints."""
     notes = list(result.system.notes)
@@ -35,17 +28,7 @@ def diagnose(result: Result) -> tuple[list[str], list[str]]:
                      "see summary.json")
     if result.energy_balance > ENERGY_WARN:
         warnings.append(f"energy balance error {result.energy_balance:.2%} exceeds {ENERGY_WARN:.0%}: reduce dt")
-    e = result.extremes
-    for c in result.system.coordinates:  # every rotation of q (theta3 in the plane)
-        if not c.rotation:
-            continue
-        theta = e.peak(c.column("d"))
-        if theta > ROTATION_WARN:
-            i = e.names.index(c.column("d"))
-            t = e.t_max[i] if abs(e.max[i]) >= abs(e.min[i]) else e.t_min[i]
-            warnings.append(f"the rotation reaches {theta:.3g} rad at t = {t:.4g} s, beyond the small rotations of the "
-                            f"seed's kinematics (eqs. 7-8, about {theta / 2:.1%} error in point motions; rbhyst warns "
-                            f"above {ROTATION_WARN:g} rad)")
+    # rotations beyond the seed's small ones: rbhyst.solve.kinematic says by how much, in numbers
     warnings += stroke_warnings(result)
     if result.system.static is not None:
         more_notes, more_warnings = gravity_checks(result)
@@ -57,6 +40,8 @@ def diagnose(result: Result) -> tuple[list[str], list[str]]:
 #: the standard acceleration of gravity (m/s2) and how far a deck's may differ from it unremarked
 STANDARD_GRAVITY = 9.80665
 GRAVITY_SPREAD = 0.05
+#: a static rotation under the weight alone beyond this (rad) says the deck is likely wrong
+STATIC_ROTATION_WARN = 0.05
 
 
 def gravity_checks(result: Result) -> tuple[list[str], list[str]]:
@@ -77,7 +62,7 @@ def gravity_checks(result: Result) -> tuple[list[str], list[str]]:
         warnings.append(f"body.gravity: |g| = {gmag:.6g} m/s2 is {gmag / STANDARD_GRAVITY:.4g} times the standard "
                         f"{STANDARD_GRAVITY} m/s2 (rbhyst takes it in m/s2: was it given in mm/s2 or cm/s2?)")
     shift = float(np.hypot(st.q[0], st.q[1]))
-    if shift > size or abs(st.q[2]) > ROTATION_WARN:
+    if shift > size or abs(st.q[2]) > STATIC_ROTATION_WARN:
         warnings.append(f"body.gravity: the static deflection under the weight is {shift:.4g} m and {abs(st.q[2]):.4g} rad, "
                         f"against a body of {size:.4g} m: beyond what the elements' sets and the seed's small "
                         "rotations describe; check body.gravity, body.mass and the sets' stiffness")

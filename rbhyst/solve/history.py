@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from rbhyst.model.coordinates import PLANE, columns, translations
+from rbhyst.model.kinematics import point_motion_exact
 from rbhyst.model.points import point_columns, point_motion
 
 
@@ -101,6 +102,9 @@ class Layout:
         self.coordinates = coords
         self._expand = np.array([el.row for el in system.elements for _ in range(el.count)], dtype=int)
         self._rb = system.bvec * system.mult[:, None]  # rows' share of R = sum mult b f
+        # exact kinematics: the rotation's entry of b_e(q) is b3 cos(theta) - c sin(theta)
+        self._rot = system.rotation_index
+        self._rc = system.kernel_axial * system.mult
         self._minv = 1.0 / np.asarray(system.mass, dtype=float)
         self._ct = system.C.T.copy() if self.damped else None
 
@@ -118,6 +122,9 @@ class Layout:
         out[:, self.slices["v"]] = raw.v
         r = out[:, self.slices["R"]]
         r[:] = raw.f @ self._rb
+        if self._rot >= 0:
+            th = raw.d[:, self._rot]
+            r[:, self._rot] = np.cos(th) * r[:, self._rot] - np.sin(th) * (raw.f @ self._rc)
         # the total acceleration from the equation of motion at the row's own state and time:
         # M at = p(t) - R - C v (the elements and dampers see only the relative motion, so it is
         # continuous where the support acceleration jumps; a jump of an external force: the row
@@ -138,8 +145,12 @@ class Layout:
         first = self.slices["points"].start
         for k, (_, x) in enumerate(self.points):
             c = first + self._point_width * k
-            point_motion(out[:, self.slices["d"]], at, x, out=out[:, c:c + self._point_width],
-                         coordinates=self.coordinates)
+            if self._rot >= 0:
+                point_motion_exact(out[:, self.slices["d"]], raw.v, at, x, raw.d[:, self._rot],
+                                   float(self.origin[self._rot]), out=out[:, c:c + self._point_width])
+            else:
+                point_motion(out[:, self.slices["d"]], at, x, out=out[:, c:c + self._point_width],
+                             coordinates=self.coordinates)
         el = self.slices["elements"]
         out[:, el.start:el.stop:2] = raw.u[:, self._expand]
         out[:, el.start + 1:el.stop:2] = raw.f[:, self._expand]

@@ -246,7 +246,13 @@ class _FixedStepPlan(Plan):
             self.level0[int(nsub)] = level0
         self.bvec = np.ascontiguousarray(system.bvec)
         self.params = np.ascontiguousarray(system.params)
-        self.wgt = (self.bvec * self.bvec) @ self.minv
+        self.axial = system.kernel_axial
+        # the monitor's trace bound, b_e^T M^-1 b_e: with exact kinematics the rotation's entry of
+        # b_e(q) turns between +-sqrt(b3^2 + axial^2), its largest taken
+        rows = self.bvec.copy()
+        if system.rotation_index >= 0:
+            rows[:, system.rotation_index] = np.hypot(rows[:, system.rotation_index], self.axial)
+        self.wgt = (rows * rows) @ self.minv
         ne = self.bvec.shape[0]
         self.layout = Layout(system, s.points)
         self.chunk = min(_chunk_rows(ne, system.n, len(self.layout.names), self.nsub), self.n_steps)
@@ -288,10 +294,11 @@ class _FixedStepPlan(Plan):
         # compilation per n), which unrolls every loop over the coordinates
         return kernel("run_chunk", n_q)(self.method.kernel_id, self.coef[nsub], tuple(self.system.mass), tuple(self.minv),
                                         self.cm, self.damped,
-                                        self.bvec, self.system.mult, self.params, self.wgt, load,
+                                        self.bvec, self.axial, self.system.rotation_index, self.system.mult,
+                                        self.params, self.wgt, load,
                                         t0, h_c, rows_every, n, s.max_omega_dt, self.level0[nsub], s.max_substep_level,
                                         s.newton_tol, s.newton_max_iter, x, st, np.zeros((ne, N_STATE)), np.zeros((ne, 2)),
-                                        np.zeros((N_W, n_q)), np.zeros((n_q, n_q)), buf.d, buf.v, buf.u, buf.f, buf.e,
+                                        np.zeros((ne, n_q)), np.zeros((N_W, n_q)), np.zeros((n_q, n_q)), buf.d, buf.v, buf.u, buf.f, buf.e,
                                         self.info)
 
     def segments(self, fine: bool = False):

@@ -64,6 +64,8 @@ class Result:
     #: (result, out, plots=) -> folder: what :meth:`write` calls (set by the pipeline above)
     writer: Callable | None = field(default=None, repr=False, compare=False)
     deck: dict | None = None  # the deck as run (its keys as given, the run's overrides applied)
+    #: the kinematic model and the error it carries (rbhyst.solve.kinematic), when checked
+    kinematics: dict | None = None
 
     @property
     def q_sample(self) -> np.ndarray:
@@ -159,6 +161,7 @@ class Result:
                             for dp in system.dampers]} if system.dampers else {}),
             **({"rayleigh": system.rayleigh.summary()} if getattr(system, "rayleigh", None) is not None else {}),
             **({"static": self._static_summary()} if system.static is not None else {}),
+            "modes": self._modes_summary(),
             "analysis": {
                 "integrator": s.integrator,
                 "dt_s": s.dt,
@@ -184,6 +187,7 @@ class Result:
                 **({"viscous_J": float(self._final("E_viscous_J"))} if "E_viscous_J" in self.columns else {}),
             },
             "accuracy": self.accuracy,
+            **({"kinematics": self.kinematics} if self.kinematics is not None else {}),
             "peaks": e.peaks(),
             "extremes": e.as_dict(),
             "notes": list(self.notes),
@@ -215,6 +219,18 @@ class Result:
                 "elements": [{"u_m": float(a), "f_N": float(b)} for a, b in zip(u, f)],
                 "out_of_balance": st.residual, "iterations": st.iterations,
                 "note": "displacements in time_history.csv are measured from here; element deformations are total"}
+
+    def _modes_summary(self) -> dict:
+        """The undamped modes of the initial system and, at rest under gravity, of its tangent
+        (rbhyst.solve.modes); at_rest only where the run found the static equilibrium."""
+        from rbhyst.solve.modes import modes_summary
+
+        system = self.system
+        if system.weight is not None and system.static is None:  # (not a run's: no equilibrium to take)
+            import dataclasses
+
+            system = dataclasses.replace(system, weight=None)
+        return modes_summary(system)
 
     def _final(self, name: str) -> float:
         return self.plot.final[self.columns.index(name)]

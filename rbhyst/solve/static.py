@@ -43,6 +43,8 @@ def static_equilibrium(system) -> Static:
     params = np.ascontiguousarray(system.params)
     mult = system.mult
     ne, n = bvec.shape
+    axial, rot = system.kernel_axial, system.rotation_index
+    bq = bvec.copy()  # the rows at q (exact kinematics)
     st = np.zeros((2, ne, kernels.N_STATE))
     for e in range(ne):
         st[0, e, kernels.K] = max(virgin_tangent(params[e], 1.0), virgin_tangent(params[e], -1.0))
@@ -56,7 +58,7 @@ def static_equilibrium(system) -> Static:
         target = w * (k / INCREMENTS)
         for it in range(MAX_ITERATIONS):
             r = np.zeros(n)
-            ok, bad, _ = update_elements(bvec, mult, params, q, st, cur, kpeak, r, n)
+            ok, bad, _, kgeo = update_elements(bvec, axial, rot, mult, params, q, st, cur, kpeak, r, bq, n)
             if not ok:
                 raise AnalysisError(f"static equilibrium under gravity: element row {bad + 1} left its calibrated "
                                     "range (exp overflow): the elements cannot carry the weight")
@@ -64,7 +66,9 @@ def static_equilibrium(system) -> Static:
             total += 1
             if np.max(np.abs(res)) <= TOLERANCE * scale:
                 break
-            kt = (bvec.T * (mult * kpeak[:, 1])) @ bvec
+            kt = (bq.T * (mult * kpeak[:, 1])) @ bq
+            if rot >= 0:
+                kt[rot, rot] += kgeo
             try:
                 dq = np.linalg.solve(kt, res)
             except np.linalg.LinAlgError:

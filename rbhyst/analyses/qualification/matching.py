@@ -17,7 +17,12 @@ their wavelet details):
    followed by rest as that command follows it; the Fourier amplitudes of s are multiplied by
    the ratio aimed-at / TRS, interpolated on log frequency, and the loop goes on until the TRS
    lies within the band at every check frequency, with a margin for the rounding of the file.
-   The aim is sqrt(0.9 x 1.3) = 1.08 times the RRS, the middle of AC156's band in logarithm.
+   The aim is the middle of the band in logarithm: sqrt(0.9 x 1.3) = 1.08 times the RRS for
+   AC156's band, sqrt(1.0 x 1.3) = 1.14 for IEEE 693's.
+4. Where the RRS asks for a least peak acceleration (AC156: 0.9 A_RIG; IEEE 693: the ZPA) and
+   the record falls short of it, its largest peak is raised to it (with the margin) by the
+   shape a peak of the process has on average (its autocorrelation, the transform of its power
+   spectrum: given x(t0) = a, a Gaussian process is a rho(t - t0) in the mean), centred on it.
 
 **End at rest.** The analysis takes a record as linear between its samples, so its velocity
 and displacement are exact integrals of that; a correction e(t) (c0 + c1 tau + c2 tau^2 + c3
@@ -34,7 +39,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from rbhyst.errors import AnalysisError, InputError
-from rbhyst.analyses.qualification.rrs import AC156_DURATION, AC156_STRONG, G, RRS, sixth_octave
+from rbhyst.analyses.qualification.rrs import (AC156_DURATION, AC156_STRONG, G, IEEE693_DURATION, IEEE693_STRONG,
+                                               RRS, sixth_octave)
 
 #: the TRS is aimed at this multiple of the RRS: the middle of the 0.9-1.3 band in logarithm
 AIM = math.sqrt(0.9 * 1.3)
@@ -117,12 +123,15 @@ def trs(acc: np.ndarray, dt: float, freqs: np.ndarray, damping: float) -> np.nda
 
 @dataclass
 class Check:
-    """The TRS of one record against its RRS at the 1/6-octave frequencies of the check range."""
+    """The TRS of one record against its RRS at the 1/6-octave frequencies of the check range,
+    and its peak acceleration against the least the RRS asks for (when it asks: ``peak_min``)."""
 
     frequency_hz: np.ndarray
     rrs: np.ndarray  # m/s2
     trs: np.ndarray  # m/s2
     band: tuple[float, float]
+    peak: float | None = None  # m/s2, the record's peak acceleration
+    peak_min: float | None = None  # m/s2, the least it may be (None: not checked)
 
     @property
     def ratio(self) -> np.ndarray:
@@ -134,8 +143,12 @@ class Check:
         return (self.ratio >= lo) & (self.ratio <= hi)
 
     @property
+    def peak_ok(self) -> bool:
+        return self.peak_min is None or (self.peak is not None and self.peak >= self.peak_min)
+
+    @property
     def ok(self) -> bool:
-        return bool(self.within.all())
+        return bool(self.within.all()) and self.peak_ok
 
     def summary(self) -> dict:
         r = self.ratio
@@ -143,7 +156,16 @@ class Check:
         return {"pass": self.ok, "band": list(self.band), "frequencies": int(len(r)),
                 "min_ratio": float(r[i]), "min_at_hz": float(self.frequency_hz[i]),
                 "max_ratio": float(r[j]), "max_at_hz": float(self.frequency_hz[j]),
-                "outside_hz": [float(f) for f in self.frequency_hz[~self.within]]}
+                "outside_hz": [float(f) for f in self.frequency_hz[~self.within]],
+                "within_band": bool(self.within.all()),
+                "peak_g": None if self.peak is None else self.peak / G,
+                "peak_min_g": None if self.peak_min is None else self.peak_min / G,
+                "peak_pass": self.peak_ok}
+
+    def said_peak(self) -> str:
+        """Why the peak fails: it and the least it may be."""
+        return (f"its peak acceleration {self.peak / G:.4g} g is below {self.peak_min / G:.4g} g "
+                f"({self.peak_min / self.rrs[-1]:g} times the RRS at {self.frequency_hz[-1]:.4g} Hz)")
 
     def said(self) -> str:
         s = self.summary()
@@ -153,7 +175,7 @@ class Check:
 
 def check_record(acc: np.ndarray, dt: float, rrs: RRS) -> Check:
     f = sixth_octave(*rrs.check_range)
-    return Check(f, rrs(f), trs(acc, dt, f, rrs.damping), rrs.band)
+    return Check(f, rrs(f), trs(acc, dt, f, rrs.damping), rrs.band, float(np.max(np.abs(acc))), rrs.peak_min)
 
 
 @dataclass
@@ -174,6 +196,7 @@ class Record:
                 "end_velocity_m_s": float(v[-1]), "end_displacement_m": float(d[-1]),
                 "peak_velocity_m_s": float(np.max(np.abs(v))), "peak_displacement_m": float(np.max(np.abs(d))),
                 "strong_motion_s": strong, "arias_5_95_s": arias_duration(acc, dt),
+                "strong_part_ratio": strong_part_ratio(acc, dt),
                 "trs": self.check.summary()}
 
 
@@ -211,13 +234,19 @@ class Motion:
 MAX_CORRELATION = 0.3
 
 
-def arias_duration(acc: np.ndarray, dt: float) -> float:
-    """Time between 5 % and 95 % of the Arias intensity (the significant duration)."""
+def arias_duration(acc: np.ndarray, dt: float, lo: float = 0.05, hi: float = 0.95) -> float:
+    """Time between ``lo`` and ``hi`` of the Arias intensity (5 % to 95 %: the significant duration)."""
     e = np.concatenate([[0.0], np.cumsum(0.5 * dt * (acc[:-1] ** 2 + acc[1:] ** 2))])
     if e[-1] <= 0.0:
         return 0.0
     t = dt * np.arange(len(acc))
-    return float(np.interp(0.95 * e[-1], e, t) - np.interp(0.05 * e[-1], e, t))
+    return float(np.interp(hi * e[-1], e, t) - np.interp(lo * e[-1], e, t))
+
+
+def strong_part_ratio(acc: np.ndarray, dt: float) -> float:
+    """IEEE 693's strong part ratio: the 25-75 % Arias duration over the 5-95 % one."""
+    whole = arias_duration(acc, dt)
+    return arias_duration(acc, dt, 0.25, 0.75) / whole if whole > 0.0 else 0.0
 
 
 def motion_problems(rrs: dict[str, RRS], duration: float, dt: float, strong: float | None,
@@ -245,6 +274,9 @@ def motion_problems(rrs: dict[str, RRS], duration: float, dt: float, strong: flo
     if standard == "ac156" and (duration < AC156_DURATION or s < AC156_STRONG):
         problems.append(f"{keys['duration']}: {duration:g} s: AC156 asks for {AC156_STRONG:g} s of strong motion "
                         f"within at least {AC156_DURATION:g} s (ramps of 5 s): {keys['duration']} 30 or more")
+    if standard == "ieee693" and s < IEEE693_STRONG:
+        problems.append(f"{keys['duration']}: {duration:g} s: IEEE 693 asks for {IEEE693_STRONG:g} s of strong "
+                        f"motion (ramps of 5 s): {keys['duration']} {IEEE693_DURATION:g} or more")
     return problems
 
 
@@ -276,7 +308,8 @@ def _matched_motion(rrs, number, duration, dt, seed, strong) -> Motion:
 def _failure(m: Motion, rrs, duration, dt, seed, strong) -> str:
     """Why motion ``m`` fails, and what would work: another seed tried here, or a longer motion."""
     bad = [f"{axis}: its TRS lies from {r.check.said()}, outside {r.check.band[0]:g}-{r.check.band[1]:g}"
-           for axis, r in m.records.items() if not r.check.ok]
+           for axis, r in m.records.items() if not r.check.within.all()]
+    bad += [f"{axis}: {r.check.said_peak()}" for axis, r in m.records.items() if not r.check.peak_ok]
     c = m.correlation
     if c is not None and abs(c) >= MAX_CORRELATION:
         bad.append(f"the axes' correlation coefficient is {c:.3f}, not below {MAX_CORRELATION:g}")
@@ -307,9 +340,28 @@ def _taper(f: np.ndarray, f_low: float, f_high: float) -> np.ndarray:
     return out
 
 
+def aims(band: tuple[float, float]) -> tuple[float, float, float]:
+    """AIM, TOP_AIM and PEAK_FLOOR for a band: as set for AC156's 0.9-1.3 (the middle of the band
+    in logarithm; the top's aim and the peaks' floor scaled with the band's lower limit)."""
+    lo, hi = band
+    scale = lo / 0.9
+    return math.sqrt(lo * hi), TOP_AIM * scale, PEAK_FLOOR * scale
+
+
+def _lift(acc: np.ndarray, pulse: np.ndarray, target: float) -> np.ndarray:
+    """acc with its largest peak raised to ``target`` by a pulse centred on it (``pulse``: the
+    process's autocorrelation, 1 at its first sample)."""
+    i = int(np.argmax(np.abs(acc)))
+    n = len(acc)
+    return acc + np.sign(acc[i]) * (target - abs(acc[i])) * np.roll(pulse, i)[:n]
+
+
 def match(rrs: RRS, duration: float, dt: float, strong: float, rng) -> tuple[np.ndarray, int]:
-    """One record (m/s2) whose TRS lies within the RRS's band (as far as MAX_ITERATIONS take it)
-    and the iterations it took."""
+    """One record (m/s2) whose TRS lies within the RRS's band and whose peak acceleration is at
+    least the RRS's ``peak_min`` (as far as MAX_ITERATIONS take it), and the iterations it took.
+
+    Long because it is one iteration loop with its set-up: the control frequencies and aims, the
+    band, the Fourier correction, the peaks cut or raised and the end at rest."""
     n = int(round(duration / dt)) + 1
     t = dt * np.arange(n)
     env = envelope(t, duration, strong)
@@ -327,7 +379,9 @@ def match(rrs: RRS, duration: float, dt: float, strong: float, rng) -> tuple[np.
                                         checks]))
     # at the top of the range the TRS tends to the peak acceleration, which the content below
     # sets as much as the content there: aimed lower there, it lands inside the band
-    aim = rrs(control) * np.exp(np.interp(np.log(control), np.log([hi / 4.0, hi]), [math.log(AIM), math.log(TOP_AIM)]))
+    aim_mid, aim_top, peak_floor = aims(rrs.band)
+    aim = rrs(control) * np.exp(np.interp(np.log(control), np.log([hi / 4.0, hi]), [math.log(aim_mid),
+                                                                                    math.log(aim_top)]))
     is_check = np.isin(control, checks)
     top_check = np.flatnonzero(is_check)[-1]
     lf = np.log(np.maximum(f, 1e-6))
@@ -335,12 +389,23 @@ def match(rrs: RRS, duration: float, dt: float, strong: float, rng) -> tuple[np.
     amp = rrs(np.maximum(f, 1e-6)) * band
     acc = to_rest(env * np.fft.irfft(np.fft.rfft(rng.standard_normal(m)) * amp, m)[:n], dt, env)
     lo_ok, hi_ok = rrs.band[0] + MARGIN, rrs.band[1] - 3 * MARGIN
+    # the least peak acceleration (when the RRS asks for one), with the same margin, and what a
+    # peak below it is raised to
+    peak_ok = None if rrs.peak_min is None else rrs.peak_min * (1.0 + MARGIN)
+    pulse = None
+    if peak_ok is not None:
+        # the shape a peak of the process has on average: given x(t0) = a, a Gaussian process is
+        # a rho(t - t0) in the mean, rho its autocorrelation, the transform of its power spectrum
+        pulse = np.fft.irfft(amp**2, m)
+        pulse /= pulse[0]
     best, best_err, best_it = None, math.inf, 0
     for it in range(MAX_ITERATIONS + 1):
         sa = trs(acc, dt, control, rrs.damping)
         ratio = sa / rrs(control)
         r_check = ratio[is_check]
         err = max(np.max(np.log(lo_ok / r_check)), np.max(np.log(r_check / hi_ok)))
+        if peak_ok is not None:
+            err = max(err, math.log(peak_ok / np.max(np.abs(acc))))
         if err < best_err:
             best, best_err, best_it = acc, err, it
         if err <= 0.0 or it == MAX_ITERATIONS:
@@ -354,16 +419,24 @@ def match(rrs: RRS, duration: float, dt: float, strong: float, rng) -> tuple[np.
             # where the TRS at the top, the peak acceleration, is too high, the peaks are cut
             # to what it should be (the next corrections restore the spectrum around them), but
             # never below the RRS there: a rigid oscillator sees the peak acceleration itself
-            limit = max(np.max(np.abs(acc)) * TOP_AIM / ratio[top_check], PEAK_FLOOR * rrs(hi))
+            limit = max(np.max(np.abs(acc)) * aim_top / ratio[top_check], peak_floor * rrs(hi),
+                        0.0 if peak_ok is None else peak_ok * (1.0 + MARGIN))
             acc = np.clip(acc, -limit * env, limit * env)
+        elif peak_ok is not None and np.max(np.abs(acc)) < peak_ok:
+            # a peak below the least the RRS asks for is raised, by the process's own shape
+            # of a peak (the next corrections restore the spectrum around it)
+            acc = _lift(acc, pulse, peak_ok * (1.0 + MARGIN))
         acc = to_rest(acc * edges, dt, env)
     return best, best_it
 
 
 # ---------------------------------------------------------------- files
 
-#: trs.csv's columns, one row per motion, axis and checked frequency
-TRS_COLUMNS = ("motion", "axis", "frequency_hz", "rrs_g", "trs_g", "ratio", "lower_g", "upper_g", "within")
+#: trs.csv's columns, one row per motion, axis and checked frequency; the last three, the same on
+#: every row of a motion's axis, its peak acceleration, the least it may be (empty: not checked)
+#: and whether it is (yes, no; empty: not checked)
+TRS_COLUMNS = ("motion", "axis", "frequency_hz", "rrs_g", "trs_g", "ratio", "lower_g", "upper_g", "within",
+               "peak_g", "peak_min_g", "peak_within")
 
 
 def record_text(motion: Motion, axis: str, mark: str) -> str:
@@ -388,9 +461,12 @@ def trs_rows(motions: list[Motion]) -> list[str]:
         for axis, r in m.records.items():
             c = r.check
             lo, hi = c.band
+            peak = "" if c.peak is None else f"{c.peak / G:.6g}"
+            least, ok_peak = ("", "") if c.peak_min is None else (f"{c.peak_min / G:.6g}",
+                                                                  "yes" if c.peak_ok else "no")
             for f, a, b, ok in zip(c.frequency_hz, c.rrs / G, c.trs / G, c.within):
                 lines.append(f"{m.number},{axis},{f:.6g},{a:.6g},{b:.6g},{b / a:.6g},{lo * a:.6g},{hi * a:.6g},"
-                             f"{'yes' if ok else 'no'}")
+                             f"{'yes' if ok else 'no'},{peak},{least},{ok_peak}")
     return lines
 
 

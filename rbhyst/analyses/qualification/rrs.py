@@ -1,9 +1,13 @@
-"""Required response spectra (RRS): ICC-ES AC156 built in, any other from a CSV file.
+"""Required response spectra (RRS): ICC-ES AC156 and IEEE Std 693 built in, any other from a
+CSV file.
 
 An RRS is a curve of spectral acceleration (the maximax absolute acceleration of a linear
 oscillator, as rbhyst.response computes it) against oscillator frequency at one damping ratio,
 with the frequency range over which a test response spectrum (TRS) must lie within a band of it
-(0.9 to 1.3 times the RRS for AC156). Between breakpoints it is a straight line on log-log axes.
+(0.9 to 1.3 times the RRS for AC156) and, for the standards, the least peak acceleration of the
+record (a multiple of the RRS at the top of that range). Between breakpoints it is a straight
+line on log-log axes, unless the standard gives it by formulas (IEEE 693), which it then follows
+exactly.
 
 AC156 (ICC-ES AC156, Acceptance Criteria for Seismic Certification by Shake-Table Testing of
 Nonstructural Components, the form that goes with ASCE 7-05 to 7-16), 5 % damping:
@@ -14,7 +18,28 @@ Nonstructural Components, the form that goes with ASCE 7-05 to 7-16), 5 % dampin
 - shape: A_FLX flat from 1.3 to 8.3 Hz, a straight line on log-log axes down to A_RIG at
   33.3 Hz, A_RIG above; below 1.3 Hz the straight log-log line through A_FLX / 10 at 0.1 Hz
   (the standard's figure, read as an open implementation reads it; it lies outside the range
-  the TRS is held to, 1.3 to 33.3 Hz).
+  the TRS is held to, 1.3 to 33.3 Hz);
+- the record's peak acceleration at least 0.9 A_RIG (the TRS at 33.3 Hz and above).
+
+IEEE 693 (IEEE Std 693-2005, Recommended Practice for Seismic Design of Substations, Annex A:
+Figure A.1, the high performance level's required response spectrum, and Figure A.2, the
+moderate level's, half of it at every frequency and damping; the 2018 edition keeps the shape),
+in g, f in Hz, beta = (3.21 - 0.68 ln(100 zeta)) / 2.1156 (Newmark and Hall's median amplification
+3.21 - 0.68 ln(zeta %), normalised at 5 %: beta(0.05) = 0.99999), for the high level:
+
+- Sa = 2.288 beta f for f < 1.1 Hz;
+- Sa = 2.5 beta from 1.1 to 8 Hz;
+- Sa = (26.4 beta - 10.56) / f - 0.8 beta + 1.32 from 8 to 33 Hz (continuous at 8 Hz, 2.5 beta,
+  and at 33 Hz, 1.0, for every beta);
+- Sa = 1.0 (the ZPA) above 33 Hz;
+
+the moderate level half of it (1.144 beta f, 1.25 beta, (13.2 beta - 5.28) / f - 0.4 beta + 0.66,
+0.5 g); the vertical (x2) 80 % of the horizontal (x1) at every frequency. At 1.1 Hz the first
+line gives 2.517 beta, 0.7 % above the plateau: a step the standard's formulas have (2.288 is
+not 2.5 / 1.1), kept. Its test motion: the TRS computed at 5 % damping must envelop the RRS, the
+range including the lower corner, 1.1 Hz (read here as 1.1 to 33 Hz), and 20 s of strong
+motion; the upper tolerance (1.3 times the RRS here) and the least peak acceleration (the ZPA
+itself here) are rbhyst's defaults where the text was not at hand.
 """
 
 from __future__ import annotations
@@ -22,6 +47,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Callable
 
 import numpy as np
 
@@ -40,7 +66,28 @@ AC156_BAND = (0.9, 1.3)
 AC156_DAMPING = 0.05
 #: AC156's test motion: total duration and strong-motion part (s)
 AC156_DURATION, AC156_STRONG = 30.0, 20.0
-STANDARDS = ("ac156",)
+#: AC156: the record's peak acceleration must be at least this multiple of A_RIG
+AC156_ZPA_RATIO = 0.9
+
+#: IEEE 693's breakpoints (Hz): the lower corner, the end of the plateau, the ZPA's start
+IEEE693_F = (1.1, 8.0, 33.0)
+#: the TRS is checked over this range (the lower corner, 1.1 Hz, included; the ZPA from 33 Hz)
+IEEE693_RANGE = (1.1, 33.0)
+#: "envelop": at least the RRS; at most 1.3 times it, rbhyst's default (as AC156's upper limit)
+IEEE693_BAND = (1.0, 1.3)
+#: the damping the TRS is computed at for matching (the RRS follows beta at any other)
+IEEE693_DAMPING = 0.05
+#: the damping ratios beta is used over (Newmark and Hall's amplification factors' range)
+IEEE693_DAMPING_RANGE = (0.005, 0.2)
+#: the horizontal ZPA (g) of each level's performance level spectrum (Figures A.1, A.2)
+IEEE693_LEVELS = {"high": 1.0, "moderate": 0.5}
+#: the vertical spectrum is this fraction of the horizontal
+IEEE693_VERTICAL = 0.8
+#: the record's peak acceleration must be at least this multiple of the ZPA (rbhyst's default)
+IEEE693_ZPA_RATIO = 1.0
+#: IEEE 693's test motion: strong-motion part (s), within a motion of ramps of 5 s
+IEEE693_DURATION, IEEE693_STRONG = 30.0, 20.0
+STANDARDS = ("ac156", "ieee693")
 
 
 @dataclass(frozen=True)
@@ -56,11 +103,24 @@ class RRS:
     check_range: tuple[float, float]
     band: tuple[float, float] = AC156_BAND
     source: str = ""
+    #: the record's peak acceleration must be at least this multiple of the RRS at the top of
+    #: ``check_range`` (None: not checked, as for a file's RRS)
+    zpa_ratio: float | None = None
+    #: sa (m/s2) at f (Hz) where a standard gives the curve by formulas (``frequency_hz`` and
+    #: ``sa`` then tabulate it at its breakpoints); None: log-log between the breakpoints
+    shape: Callable | None = None
 
     def __call__(self, f) -> np.ndarray:
         """sa (m/s2) at frequencies f (Hz)."""
+        if self.shape is not None:
+            return self.shape(np.asarray(f, float))
         lf = np.log(np.clip(np.asarray(f, float), self.frequency_hz[0], self.frequency_hz[-1]))
         return np.exp(np.interp(lf, np.log(self.frequency_hz), np.log(self.sa)))
+
+    @property
+    def peak_min(self) -> float | None:
+        """The least peak acceleration (m/s2) a record must reach, None when not checked."""
+        return None if self.zpa_ratio is None else self.zpa_ratio * float(self(self.check_range[1]))
 
     @property
     def sa_g(self) -> np.ndarray:
@@ -69,7 +129,9 @@ class RRS:
     def describe(self) -> dict:
         return {"name": self.name, "damping": self.damping, "check_range_hz": list(self.check_range),
                 "band": list(self.band), "frequency_hz": [float(f) for f in self.frequency_hz],
-                "sa_g": [float(a) for a in self.sa_g], "source": self.source}
+                "sa_g": [float(a) for a in self.sa_g], "source": self.source,
+                "peak_min_ratio": self.zpa_ratio,
+                "peak_min_g": None if self.peak_min is None else self.peak_min / G}
 
 
 def ac156_levels(sds: float, z_over_h: float) -> dict[str, float]:
@@ -106,7 +168,55 @@ def ac156(sds: float, z_over_h: float) -> dict[str, RRS]:
         sa_g = np.array([flx / 10.0, flx, flx, rig])
         out[axis] = RRS(f"AC156 {what}, SDS = {sds:g} g, z/h = {z_over_h:g}", AC156_DAMPING,
                         np.array(AC156_F), sa_g * G, AC156_RANGE, AC156_BAND,
-                        "ICC-ES AC156 (with ASCE 7-05 to 7-16)")
+                        "ICC-ES AC156 (with ASCE 7-05 to 7-16)", AC156_ZPA_RATIO)
+    return out
+
+
+def ieee693_beta(damping: float) -> float:
+    """IEEE 693's damping factor: (3.21 - 0.68 ln(100 zeta)) / 2.1156 (0.99999 at 5 %)."""
+    return (3.21 - 0.68 * math.log(100.0 * damping)) / 2.1156
+
+
+def ieee693_sa_g(f, level: str, damping: float = IEEE693_DAMPING) -> np.ndarray:
+    """IEEE 693's horizontal performance level spectrum (g) of ``level`` at frequencies f (Hz)."""
+    f = np.asarray(f, float)
+    b = ieee693_beta(damping)
+    high = np.where(f < 1.1, 2.288 * b * f,
+                    np.where(f <= 8.0, 2.5 * b,
+                             np.where(f <= 33.0, (26.4 * b - 10.56) / np.maximum(f, 1e-300) - 0.8 * b + 1.32, 1.0)))
+    return IEEE693_LEVELS[level] * high
+
+
+def ieee693_problems(level, damping, level_key: str = "--level", damping_key: str = "--rrs-damping") -> list[str]:
+    problems = []
+    if level is None:
+        problems.append(f"{level_key}: required with the IEEE 693 spectrum: {' or '.join(IEEE693_LEVELS)} "
+                        "(its performance level)")
+    elif str(level).lower() not in IEEE693_LEVELS:
+        problems.append(f"{level_key}: {level!r}: {' or '.join(IEEE693_LEVELS)}")
+    lo, hi = IEEE693_DAMPING_RANGE
+    if damping is not None and not lo <= damping <= hi:
+        problems.append(f"{damping_key}: {damping:g}: IEEE 693's damping factor is used from {lo:g} to {hi:g} "
+                        f"({IEEE693_DAMPING:g} by default, the damping it is matched at)")
+    return problems
+
+
+def ieee693(level: str, damping: float | None = None) -> dict[str, RRS]:
+    """IEEE 693's horizontal (x1) and vertical (x2, 80 % of it) RRS of the ``level``
+    (high or moderate) performance level spectrum, drawn at ``damping`` (5 % by default)."""
+    problems = ieee693_problems(level, damping)
+    if problems:
+        raise InputError(problems)
+    level = level.lower()
+    damping = IEEE693_DAMPING if damping is None else float(damping)
+    f = np.array((0.1,) + IEEE693_F + (100.0,))
+    out = {}
+    for axis, factor, what in (("x1", 1.0, "horizontal"), ("x2", IEEE693_VERTICAL, "vertical")):
+        def shape(x, factor=factor):
+            return factor * G * ieee693_sa_g(x, level, damping)
+        out[axis] = RRS(f"IEEE 693 {level} performance level, {what}", damping, f, shape(f), IEEE693_RANGE,
+                        IEEE693_BAND, f"IEEE Std 693-2005, Figure A.{1 if level == 'high' else 2}"
+                        + ("" if axis == "x1" else ", vertical 80 %"), IEEE693_ZPA_RATIO, shape)
     return out
 
 
@@ -169,21 +279,36 @@ def read_rrs(path: Path, damping: float | None, name: str = "", damping_key: str
 
 
 def requested_rrs(rrs: str | None, rrs_x2: str | None, damping: float | None, sds: float | None,
-                  z_over_h: float | None, base: Path, keys: dict[str, str]) -> tuple[dict[str, RRS], str | None]:
+                  z_over_h: float | None, base: Path, keys: dict[str, str],
+                  level: str | None = None) -> tuple[dict[str, RRS], str | None]:
     """The RRS per axis a command asks for, and the standard's name (None for files): ``rrs`` a
     standard's name or the x1 (horizontal) RRS file, ``rrs_x2`` the vertical one's file.
-    ``keys`` names the options (or deck keys) in messages: rrs, rrs_x2, damping, sds, z_over_h."""
+    ``keys`` names the options (or deck keys) in messages: rrs, rrs_x2, damping, sds, z_over_h,
+    level (``level``: IEEE 693's, high or moderate)."""
+    level_key = keys.get("level", "--level")
     if rrs is None:
         raise InputError(f"{keys['rrs']}: required: {', '.join(STANDARDS)} or an RRS file (frequency_hz,sa_g)")
-    if rrs.lower() in STANDARDS:
+    standard = rrs.lower()
+    if standard == "ac156":
         problems = ac156_problems(sds, z_over_h, keys["sds"], keys["z_over_h"])
         problems += [f"{keys[k]}: not with {keys['rrs']} {rrs}: the standard gives it" for k, v in
                      (("rrs_x2", rrs_x2), ("damping", damping)) if v is not None]
+        problems += [f"{level_key}: only with {keys['rrs']} ieee693"] if level is not None else []
         if problems:
             raise InputError(problems)
-        return ac156(sds, z_over_h), rrs.lower()
-    problems = [f"{keys[k]}: only with {keys['rrs']} {', '.join(STANDARDS)}" for k, v in
+        return ac156(sds, z_over_h), standard
+    if standard == "ieee693":
+        problems = ieee693_problems(level, damping, level_key, keys["damping"])
+        problems += [f"{keys['rrs_x2']}: not with {keys['rrs']} {rrs}: the standard gives it"] \
+            if rrs_x2 is not None else []
+        problems += [f"{keys[k]}: only with {keys['rrs']} ac156" for k, v in
+                     (("sds", sds), ("z_over_h", z_over_h)) if v is not None]
+        if problems:
+            raise InputError(problems)
+        return ieee693(level, damping), standard
+    problems = [f"{keys[k]}: only with {keys['rrs']} ac156" for k, v in
                 (("sds", sds), ("z_over_h", z_over_h)) if v is not None]
+    problems += [f"{level_key}: only with {keys['rrs']} ieee693"] if level is not None else []
     out = {}
     for axis, name in (("x1", rrs), ("x2", rrs_x2)):
         if name is None:

@@ -21,12 +21,12 @@ from pathlib import Path
 import numpy as np
 
 from rbhyst.analyses.qualification import matching
-from rbhyst.analyses.qualification.rrs import G, RRS, requested_rrs
+from rbhyst.analyses.qualification.rrs import STANDARDS, G, RRS, requested_rrs
 from rbhyst.errors import InputError
 
 #: from this many motions on the demand is the mean over them, below it the largest (ASCE 7-10 16.2.4)
 MEAN_FROM = 7
-_SPECTRUM_KEYS = ("standard", "sds", "z_over_h", "rrs", "rrs_x2", "rrs_damping")
+_SPECTRUM_KEYS = ("standard", "sds", "z_over_h", "level", "rrs", "rrs_x2", "rrs_damping")
 
 
 @dataclass
@@ -50,23 +50,24 @@ def request(deck, cli: dict) -> Request:
     given = deck.qualify.model_dump(exclude_unset=True) if deck.qualify is not None else {}
     cli = {k: v for k, v in cli.items() if v is not None}
     for k in ("rrs", "rrs_x2"):  # files named on the command line are where the command runs
-        if k in cli and cli[k].lower() not in ("ac156",):
+        if k in cli and cli[k].lower() not in STANDARDS:
             cli[k] = str(Path(cli[k]).resolve())
     if "standard" in cli or "rrs" in cli:
         given = {k: v for k, v in given.items() if k not in _SPECTRUM_KEYS}
     values = {**given, **cli}
     option = {"standard": "--standard", "rrs": "--rrs", "rrs_x2": "--rrs-x2", "rrs_damping": "--rrs-damping",
-              "sds": "--sds", "z_over_h": "--z-over-h", "motions": "--motions", "duration": "--duration",
+              "sds": "--sds", "z_over_h": "--z-over-h", "level": "--level", "motions": "--motions",
+              "duration": "--duration",
               "motion_dt": "--motion-dt", "seed": "--seed"}
     keys = {k: option[k] if k in cli else f"qualify.{k}" for k in option}
     problems = []
     if "standard" in values and "rrs" in values:
         problems.append(f"{keys['rrs']}: not with {keys['standard']}: give a standard or RRS files")
-    if "standard" in cli and cli["standard"] not in ("ac156",):
-        problems.append(f"--standard: {cli['standard']!r}: ac156 (or RRS files with --rrs)")
+    if "standard" in cli and cli["standard"].lower() not in STANDARDS:
+        problems.append(f"--standard: {cli['standard']!r}: {' or '.join(STANDARDS)} (or RRS files with --rrs)")
     if "standard" not in values and "rrs" not in values:
         problems.append("qualify: no required response spectrum: --standard ac156 (with --sds and --z-over-h), "
-                        "--rrs FILE, or the same keys in the deck's [qualify]")
+                        "--standard ieee693 (with --level), --rrs FILE, or the same keys in the deck's [qualify]")
     motions = values.get("motions", 1)
     if isinstance(motions, str) and motions != "deck":
         try:
@@ -80,11 +81,11 @@ def request(deck, cli: dict) -> Request:
     if not problems:
         spec_keys = {"rrs": keys["standard"] if "standard" in values else keys["rrs"], "rrs_x2": keys["rrs_x2"],
                      "damping": keys["rrs_damping"], "sds": keys["sds"], "z_over_h": keys["z_over_h"],
-                     "duration": keys["duration"], "dt": keys["motion_dt"]}
+                     "level": keys["level"], "duration": keys["duration"], "dt": keys["motion_dt"]}
         try:
             rrs, standard = requested_rrs(values.get("standard", values.get("rrs")), values.get("rrs_x2"),
                                           values.get("rrs_damping"), values.get("sds"), values.get("z_over_h"),
-                                          deck.base, spec_keys)
+                                          deck.base, spec_keys, values.get("level"))
         except InputError as err:
             problems += err.problems
         if rrs and motions != "deck":
@@ -190,7 +191,7 @@ def qualify(deck, req: Request, folder: Path, integrator: str | None = None, dt:
     runs = []  # (label, summary dict)
     notes: list[str] = []
     motion_facts, checks = [], {axis: [] for axis in req.rrs}
-    trs_ok = True
+    trs_ok = peak_ok = band_ok = True
     if req.motions == "deck":
         system = assemble(deck, deck.base)
         duration = deck.analysis.duration or system.excitation.duration or 0.0
@@ -198,6 +199,8 @@ def qualify(deck, req: Request, folder: Path, integrator: str | None = None, dt:
         for axis, c in own.items():
             checks[axis].append(("TRS, the deck's motion", c))
             trs_ok &= c.ok
+            peak_ok &= c.peak_ok
+            band_ok &= bool(c.within.all())
         motion_facts.append({"number": 1, "source": "the deck's excitation.support",
                              "trs": {axis: c.summary() for axis, c in own.items()}})
         decks = [("deck", _deck_with_motion(deck, None))]
@@ -214,6 +217,9 @@ def qualify(deck, req: Request, folder: Path, integrator: str | None = None, dt:
                 checks[axis].append((f"TRS, motion {m.number}", m.records[axis].check))
             decks.append((f"motion {m.number}", _deck_with_motion(deck, _support(files), m.duration, notes)))
         trs_ok = all(m.ok for m in made)
+        peak_ok = all(r.check.peak_ok for m in made for r in m.records.values())
+        band_ok = all(r.check.within.all() for m in made for r in m.records.values()) and \
+            all(m.correlation is None or abs(m.correlation) < matching.MAX_CORRELATION for m in made)
         (folder / "trs.csv").write_text("\n".join(matching.trs_rows(made)) + "\n", encoding="utf-8")
         summary = matching.motions_summary(made, req.rrs, req.standard)
         (folder / "motions.json").write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")
@@ -245,7 +251,9 @@ def qualify(deck, req: Request, folder: Path, integrator: str | None = None, dt:
         "criteria": [{k: v for k, v in c.items() if k != "label"} for c in criteria],
         "trs": {"pass": trs_ok, "band": {axis: list(r.band) for axis, r in req.rrs.items()},
                 "check_range_hz": {axis: list(r.check_range) for axis, r in req.rrs.items()},
-                "max_correlation": matching.MAX_CORRELATION},
+                "max_correlation": matching.MAX_CORRELATION,
+                "peak_min_g": {axis: None if r.peak_min is None else r.peak_min / G for axis, r in req.rrs.items()},
+                "within_band": band_ok, "peak_pass": peak_ok},
         "accuracy": accuracy,
         "warnings": warnings,
         "notes": notes,
@@ -263,7 +271,7 @@ def qualify(deck, req: Request, folder: Path, integrator: str | None = None, dt:
 def _deck_trs(excitation, duration: float, rrs: dict[str, RRS]) -> dict:
     """The TRS of the deck's own support motion per axis, from its signals (rbhyst.solve.ground)."""
     from rbhyst.analyses.qualification.rrs import sixth_octave
-    from rbhyst.solve.ground import ground_spectra
+    from rbhyst.solve.ground import ground_spectra, signal_chunks
     from rbhyst.solve.located import rest_samples
 
     out = {}
@@ -271,14 +279,17 @@ def _deck_trs(excitation, duration: float, rrs: dict[str, RRS]) -> dict:
         signal = excitation.ag1 if axis == "x1" else excitation.ag2
         f = sixth_octave(*r.check_range)
         if signal is None:
-            out[axis] = matching.Check(f, r(f), np.zeros(len(f)), r.band)
+            out[axis] = matching.Check(f, r(f), np.zeros(len(f)), r.band, 0.0, r.peak_min)
             continue
         periods = np.sort(1.0 / f)
         step = getattr(signal, "dt", periods[0] / 20.0)
         t_end = max(duration, signal.end or duration) + rest_samples(periods, [r.damping], step) * step
         sa = ground_spectra(type(excitation)(**{("ag1" if axis == "x1" else "ag2"): signal}), t_end, [r.damping],
                             periods).spectrum.sa[:, 0, 0]
-        out[axis] = matching.Check(f, r(f), sa[np.argsort(np.argsort(1.0 / f))], r.band)
+        peak = 0.0  # the signal's peak acceleration, over its samples and the values it jumps to
+        for _, values, jump in signal_chunks(signal, t_end, periods[-1]):
+            peak = max(peak, float(np.max(np.abs(values), initial=0.0)), 0.0 if jump is None else abs(float(jump)))
+        out[axis] = matching.Check(f, r(f), sa[np.argsort(np.argsort(1.0 / f))], r.band, peak, r.peak_min)
     return out
 
 
@@ -359,8 +370,10 @@ def verdict_lines(v: Verdict) -> list[str]:
     for c in v.criteria:
         if not c["pass"]:
             lines.append(f"fail: {c['label']}: {c['demand']:.4g} {c['unit']} > {c['capacity']:.4g} {c['unit']}")
-    if not d["trs"]["pass"]:
+    if not d["trs"]["within_band"]:
         lines.append("fail: the motions' TRS is not within the RRS's band (trs.csv)")
+    if not d["trs"]["peak_pass"]:
+        lines.append("fail: a motion's peak acceleration is below the least the RRS asks for (trs.csv)")
     acc = d["accuracy"]
     if not acc["pass"]:
         worst = acc["estimated_error"]

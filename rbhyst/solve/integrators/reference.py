@@ -13,9 +13,10 @@ dense output, Hairer, Norsett and Wanner, Solving ODEs I, II.10; the coefficient
 tables are scipy's), compiled with numba. Two kinds of events end a step:
 
 - a reversal: an element's velocity b . v crosses zero against its branch. Its time
-  is located on the dense output (bisection-secant to round-off), the step is redone
-  to exactly that time, and the element starts its new branch there, from the force
-  it has (eq. 14 with t_P = the reversal). Interior double crossings are looked for
+  is located on the dense output (bisection-secant to round-off), the state there is
+  the dense output's (the step, accepted, continued the old branch smoothly past it: no
+  step is redone), and the element starts its new branch there, from the force it has
+  (eq. 14 with t_P = the reversal). Interior double crossings are looked for
   on a cubic Hermite interpolant of b . v and, when suspected, on the dense output.
 - a breakpoint of the load: a record's samples (between them it is linear, and so are
   its pieces) and an analytic signal's start, end and corners (between them the kernel
@@ -33,7 +34,7 @@ from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -41,6 +42,7 @@ from rbhyst.solve.integrators import dop853_tableau as _dop
 from rbhyst.errors import AnalysisError
 from rbhyst.solve.kernels.compiled import kernel
 from rbhyst.solve.kernels.dop853_layout import (NS, R_ELEMENT, R_EVENTS, R_FEV, R_HMAX, R_HMIN, R_INFO, R_REJECTED, R_START_FLIPS, R_STATUS, R_STEPS, R_TIME, ST_NONFINITE, ST_OK, ST_OVERFLOW, ST_STEP_TOO_SMALL, ST_TOO_MANY_STEPS, ny)
+from rbhyst.model.kinematics import rows_at
 from rbhyst.model.records import Series
 from rbhyst.model.signals import SINE
 from rbhyst.solve.history import Layout, Raw
@@ -75,6 +77,9 @@ class Pieces:
     ends: np.ndarray
     analytic: np.ndarray
     signals: tuple = ()
+    #: per system integrated, the tolerances' basis and the start (worked out once: an estimate
+    #: may integrate the same scene twice)
+    basis: dict = field(default_factory=dict, compare=False, repr=False)
 
     def at(self, t: np.ndarray) -> np.ndarray:
         """(len(t), n) the load at times t, as the kernel sees it (a jump at a breakpoint: its right side)."""
@@ -134,24 +139,32 @@ def _load_samples(pieces: Pieces, per_piece: int = 4, most: int = 200_000) -> np
 def _scales(system, pieces: Pieces, rtol):
     """atol for (q, v): rtol x the quasi-static response to the load with the reversal stiffness;
     a rotation's at the radius of gyration sqrt(J / m) (J: its mass, m: the first translation's)."""
+    spin = np.array([c.rotation for c in system.coordinates])
+    m_t = system.mass[np.argmin(spin)] if not spin.all() else 1.0
+    # lengths per unit of each coordinate: 1 for a translation, the radius of gyration for a rotation
+    rg = np.where(spin, np.sqrt(system.mass / m_t), 1.0)
+    if id(system) not in pieces.basis:
+        pieces.basis[id(system)] = _basis(system, pieces, spin, rg)
+    length, w1 = pieces.basis[id(system)]
+    q = rtol * length * np.where(spin, 1.0 / rg, 1.0)
+    return np.concatenate([q, q * w1, [0.0]]), length, w1
+
+
+def _basis(system, pieces: Pieces, spin, rg):
+    """The displacement scale and the lowest circular frequency the tolerances are set from."""
     kr = (system.bvec.T * (system.mult * system.k_reversal)) @ system.bvec
     p = _load_samples(pieces)
     try:
         static = np.linalg.solve(kr, p.T).T
     except np.linalg.LinAlgError:  # stiffnesses far apart (an absurd f0): singular in floating point
         static = np.linalg.lstsq(kr, p.T, rcond=None)[0].T
-    spin = np.array([c.rotation for c in system.coordinates])
-    m_t = system.mass[np.argmin(spin)] if not spin.all() else 1.0
-    # lengths per unit of each coordinate: 1 for a translation, the radius of gyration for a rotation
-    rg = np.where(spin, np.sqrt(system.mass / m_t), 1.0)
     length = max(float(np.max(np.abs(static[:, ~spin]), initial=0.0)),
                  float(np.max(np.abs(static[:, spin]) * rg[spin], initial=0.0)))
     if not length > 0.0:
         length = 1e-6
     m = 1.0 / np.sqrt(system.mass)
     w1 = math.sqrt(max(float(np.min(np.linalg.eigvalsh(kr * np.outer(m, m)))), 0.0)) or 1.0
-    q = rtol * length * np.where(spin, 1.0 / rg, 1.0)
-    return np.concatenate([q, q * w1, [0.0]]), length, w1
+    return length, w1
 
 
 def _initial_state(system, pieces: Pieces):
@@ -187,8 +200,11 @@ def _initial_branches(system, pieces: Pieces):
         p0 = p0 - static.r  # the weight is carried by the elements
     a0 = p0 / system.mass
     j0 = dp0 / system.mass
-    s = np.sign(system.bvec @ a0)
-    s2 = np.sign(system.bvec @ j0)
+    # the rows where the body starts (they differ from b only at a turned static equilibrium)
+    q0 = static.q if static is not None else np.zeros(system.n)
+    rows = rows_at(system.bvec, system.axial, system.rotation_index, q0)
+    s = np.sign(rows @ a0)
+    s2 = np.sign(rows @ j0)
     s = np.where(s != 0, s, np.where(s2 != 0, s2, 1.0))
     return s.astype(float)
 
@@ -241,7 +257,9 @@ def integrate(system, t_out: np.ndarray, rtol: float = RTOL, pieces=None, max_st
     atol, length, w1 = _scales(system, pieces, rtol)
     ne, n = system.bvec.shape
     width = ny(n)
-    init, y0 = _initial_state(system, pieces)
+    if ("start", id(system)) not in pieces.basis:
+        pieces.basis[("start", id(system))] = _initial_state(system, pieces)
+    init, y0 = (a.copy() for a in pieces.basis[("start", id(system))])
     out_y = np.zeros((n_rows, width))
     out_eu = np.zeros((n_rows, ne))
     out_ef = np.zeros((n_rows, ne))
@@ -249,14 +267,16 @@ def integrate(system, t_out: np.ndarray, rtol: float = RTOL, pieces=None, max_st
     info = np.zeros(R_INFO)
     # M^-1 as a tuple: its length n is a constant of the compiled kernel (one compilation per n)
     minv = tuple(1.0 / system.mass)
-    args = (minv, np.ascontiguousarray(system.bvec), system.mult, np.ascontiguousarray(system.params),
+    args = (minv, np.ascontiguousarray(system.bvec), system.kernel_axial, system.rotation_index, system.mult, np.ascontiguousarray(system.params),
             np.ascontiguousarray(system.C))
     work = (np.zeros((6, ne)), np.zeros((7, width)), np.zeros((16, width)), np.zeros((7, width)), np.zeros((4, max(n, ne))),
             np.zeros(NS + 1))
     tail = (rtol, atol, init, y0, 1e-6, int(max_steps), _A, _B, _C, _E3, _E5, _D, out_y, out_eu, out_ef, out_eh, info, *work)
     _integrate = kernel("integrate", n)
-    # compile (or load) before the clock starts, on a one-piece problem
-    _integrate(*args, brk[:2].copy(), coef[:1].copy(), sig, t_out[:1].copy(), *tail)
+    # compile (or load) before the clock starts, on a problem of one short piece (the first piece
+    # may be the whole run: an analytic signal's)
+    _integrate(*args, np.array([0.0, min(brk[1], 1e-6 * (brk[1] - brk[0]) + 1e-12)]), coef[:1].copy(), sig,
+               t_out[:1].copy(), *tail)
     info[:] = 0.0
     start = time.perf_counter()
     rows = _integrate(*args, brk, coef, sig, t_out, *tail)

@@ -22,7 +22,8 @@ from numba import njit
 
 from rbhyst.solve.kernels.layout import (NEWTON_FAILED, W_A, W_AN, W_D, W_DN, W_PA, W_PB, W_Q, W_R, W_RN, W_V, W_VN, W_X,
                                          W_Y)
-from rbhyst.solve.kernels.elements import bbt_sums, mat_row, row_dot, solve_in_place, substep_load, update_elements
+from rbhyst.solve.kernels.elements import (bbt_sums, mat_row, row_dot, solve_in_place, start_rows, substep_load,
+                                           update_elements)
 from rbhyst.solve.integrators import central_difference, chang, kr_alpha, newmark
 from rbhyst.solve.integrators.chang import B1, B2, MC_INV
 from rbhyst.solve.integrators.kr_alpha import A_A, A_V, D_A, V_A, V_ANEW, X_NEW, X_OLD
@@ -35,7 +36,7 @@ KR_ALPHA = kr_alpha.KERNEL_ID
 
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
-def chang_step(coef, lv, minv, cm, damped, bvec, mult, params, st, cur, w, load, j, w0, w1, h, kpeak):
+def chang_step(coef, lv, minv, cm, damped, bvec, axial, rot, mult, params, st, cur, w, load, j, w0, w1, h, kpeak, bq):
     """One step of Chang's method (coef = B1, B2, (M + h/2 C)^-1) or of central difference
     (B1 = I, B2 = I/2), from the element state st[cur] into st[1 - cur] and from w[W_D, W_V,
     W_A] into w[W_DN, W_VN, W_AN] (R(d+) in w[W_R], the load in w[W_PA], w[W_PB]).
@@ -50,7 +51,7 @@ def chang_step(coef, lv, minv, cm, damped, bvec, mult, params, st, cur, w, load,
     hh = h * h
     for i in range(n):
         dn[i] = d[i] + h * mat_row(coef, lv, B1, i, v, n) + hh * mat_row(coef, lv, B2, i, a, n)
-    ok, bad, work = update_elements(bvec, mult, params, dn, st, cur, kpeak, r, n)
+    ok, bad, work, kgeo = update_elements(bvec, axial, rot, mult, params, dn, st, cur, kpeak, r, bq, n)
     if not ok:
         return False, bad, 0.0
     for i in range(n):
@@ -72,7 +73,8 @@ def chang_step(coef, lv, minv, cm, damped, bvec, mult, params, st, cur, w, load,
 
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
-def kr_alpha_step(coef, lv, minv, cm, damped, bvec, mult, params, st, cur, w, load, j, w0, w1, h, kpeak):
+def kr_alpha_step(coef, lv, minv, cm, damped, bvec, axial, rot, mult, params, st, cur, w, load, j, w0, w1, h, kpeak,
+                  bq):
     """One step of the KR-alpha method (Kolay and Ricles 2014), v being the velocity at t:
 
         d+ = d + h v + h^2 (A2 - gamma I) a
@@ -87,17 +89,12 @@ def kr_alpha_step(coef, lv, minv, cm, damped, bvec, mult, params, st, cur, w, lo
     d, v, a = w[W_D], w[W_V], w[W_A]
     dn, vn, an = w[W_DN], w[W_VN], w[W_AN]
     pa, pb, r, rn, x, y = w[W_PA], w[W_PB], w[W_R], w[W_RN], w[W_X], w[W_Y]
-    for i in range(n):
-        rn[i] = 0.0
-    for e in range(bvec.shape[0]):
-        mf = mult[e] * st[cur, e, 1]
-        for i in range(n):
-            rn[i] += mf * bvec[e, i]
+    start_rows(bvec, axial, rot, mult, st, cur, d, rn, n)
     substep_load(load, j, w0, w1, pa, pb, n)
     hh = h * h
     for i in range(n):
         dn[i] = d[i] + h * v[i] + hh * mat_row(coef, lv, D_A, i, a, n)
-    ok, bad, work = update_elements(bvec, mult, params, dn, st, cur, kpeak, r, n)
+    ok, bad, work, kgeo = update_elements(bvec, axial, rot, mult, params, dn, st, cur, kpeak, r, bq, n)
     if not ok:
         return False, bad, 0.0
     for i in range(n):
@@ -114,7 +111,8 @@ def kr_alpha_step(coef, lv, minv, cm, damped, bvec, mult, params, st, cur, w, lo
 
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
-def newmark_step(mass, cm, damped, bvec, mult, params, st, cur, w, wm, load, j, w0, w1, h, kpeak, tol, max_iter):
+def newmark_step(mass, cm, damped, bvec, axial, rot, mult, params, st, cur, w, wm, load, j, w0, w1, h, kpeak, bq, tol,
+                 max_iter):
     """One Newmark step solved for d+ by Newton iterations from d + h v + h^2/2 a.
 
     The Jacobian is 4/h^2 M + 2/h C + K_t(d+), K_t = sum mult k_t b b^T with each
@@ -137,10 +135,14 @@ def newmark_step(mass, cm, damped, bvec, mult, params, st, cur, w, wm, load, j, 
     for i in range(n):
         dn[i] = d[i] + h * v[i] + 0.5 * h * h * a[i]
     for it in range(max_iter):
-        ok, bad, work = update_elements(bvec, mult, params, dn, st, cur, kpeak, r, n)
+        ok, bad, work, kgeo = update_elements(bvec, axial, rot, mult, params, dn, st, cur, kpeak, r, bq, n)
         if not ok:
             return False, bad, 0.0, it + 1
-        bbt_sums(bvec, mult, kpeak, 1, mass, False, wm, w[W_Q])
+        if rot >= 0:
+            bbt_sums(bq, mult, kpeak, 1, mass, False, wm, w[W_Q])
+            wm[rot, rot] += kgeo  # the rows turn with the body: the forces' geometric stiffness
+        else:
+            bbt_sums(bvec, mult, kpeak, 1, mass, False, wm, w[W_Q])
         for i in range(n):
             wm[i, i] += c * mass[i]
             g[i] = mass[i] * (c * (dn[i] - d[i] - h * v[i]) - a[i]) + r[i] - pb[i]
@@ -177,23 +179,24 @@ def newmark_step(mass, cm, damped, bvec, mult, params, st, cur, w, wm, load, j, 
 
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
-def take_step(method, coef, lv, mass, minv, cm, damped, bvec, mult, params, st, cur, w, wm, load, j, w0, w1, h,
-              kpeak, tol, max_iter):
+def take_step(method, coef, lv, mass, minv, cm, damped, bvec, axial, rot, mult, params, st, cur, w, wm, load, j, w0,
+              w1, h, kpeak, bq, tol, max_iter):
     """Advance one (sub)step of size h from the state w[W_D, W_V, W_A] into w[W_DN, W_VN,
     W_AN]; the load is linear within compute step j of ``load``, the substep spanning the
     fractions w0 to w1 of it (held in w[W_PA], w[W_PB] after the step). Every step writes R(d+)
     into w[W_R] (at most 30 arguments: more would make Python pass them as a tuple, which
-    numba cannot inline).
+    numba cannot inline). rot, axial, bq: the kinematics (elements.update_elements).
 
     Returns (ok, bad element, element work, iterations).
     """
     if method == NEWMARK:
-        return newmark_step(mass, cm, damped, bvec, mult, params, st, cur, w, wm, load, j, w0, w1, h, kpeak,
-                            tol, max_iter)
+        return newmark_step(mass, cm, damped, bvec, axial, rot, mult, params, st, cur, w, wm, load, j, w0, w1, h,
+                            kpeak, bq, tol, max_iter)
     if method == KR_ALPHA:
-        ok, bad, work = kr_alpha_step(coef, lv, minv, cm, damped, bvec, mult, params, st, cur, w, load, j, w0, w1,
-                                      h, kpeak)
+        ok, bad, work = kr_alpha_step(coef, lv, minv, cm, damped, bvec, axial, rot, mult, params, st, cur, w, load,
+                                      j, w0, w1, h, kpeak, bq)
         return ok, bad, work, 1
     # Chang's method and central difference share their step (their coefficients differ)
-    ok, bad, work = chang_step(coef, lv, minv, cm, damped, bvec, mult, params, st, cur, w, load, j, w0, w1, h, kpeak)
+    ok, bad, work = chang_step(coef, lv, minv, cm, damped, bvec, axial, rot, mult, params, st, cur, w, load, j, w0,
+                               w1, h, kpeak, bq)
     return ok, bad, work, 1

@@ -86,8 +86,51 @@ def _bdot(bvec, e, y, first, n):
     return acc
 
 
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _u_el(bvec, axial, rot, e, y, n):
+    """Element e's deformation at q = y[:n]: b_e . q, or with exact kinematics (rot >= 0)
+    b_e . q with b_rot sin(theta) + axial_e (cos(theta) - 1) for b_rot theta
+    (rbhyst.solve.kernels.elements.update_elements)."""
+    if rot < 0:
+        return _bdot(bvec, e, y, 0, n)
+    acc = 0.0
+    for i in range(n):
+        if i != rot:
+            acc += bvec[e, i] * y[i]
+    half = math.sin(0.5 * y[rot])
+    return acc + bvec[e, rot] * math.sin(y[rot]) - 2.0 * axial[e] * half * half
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _v_el(bvec, axial, rot, e, y, n):
+    """Element e's deformation rate b_e(q) . v at the state y = (q, v, ...)."""
+    if rot < 0:
+        return _bdot(bvec, e, y, n, n)
+    acc = 0.0
+    for i in range(n):
+        if i != rot:
+            acc += bvec[e, i] * y[n + i]
+    return acc + (bvec[e, rot] * math.cos(y[rot]) - axial[e] * math.sin(y[rot])) * y[n + rot]
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _a_el(bvec, axial, rot, e, y, f, n):
+    """The time derivative of _v_el at the state y whose derivative is f = (v, a, ...):
+    b_e(q) . a, plus omega^2 d2u_e/dtheta2 with exact kinematics."""
+    if rot < 0:
+        return _bdot(bvec, e, f, n, n)
+    acc = 0.0
+    for i in range(n):
+        if i != rot:
+            acc += bvec[e, i] * f[n + i]
+    cs = math.cos(y[rot])
+    sn = math.sin(y[rot])
+    w = y[n + rot]
+    return acc + (bvec[e, rot] * cs - axial[e] * sn) * f[n + rot] - (bvec[e, rot] * sn + axial[e] * cs) * w * w
+
+
 @njit(cache=True, error_model="numpy", _nrt=False)
-def _rhs(t, y, k, brk, pcoef, sig, minv, bvec, mult, params, cm, s, up, gp, p, dy):
+def _rhs(t, y, k, brk, pcoef, sig, minv, bvec, axial, rot, mult, params, cm, s, up, gp, p, dy):
     """dy = (v, M^-1 (p - R - C v), p . v, v . C v) (seed eq. 11); p (4, max(n, ne)) is work
     space (the load, R, C v, each element's mult f); returns the first element that
     overflowed, or -1."""
@@ -98,15 +141,21 @@ def _rhs(t, y, k, brk, pcoef, sig, minv, bvec, mult, params, cm, s, up, gp, p, d
     mf = p[3]
     _load(t, k, brk, pcoef, sig, load, n)
     for e in range(bvec.shape[0]):
-        f, _, ok = _force(params, e, s[e], up[e], gp[e], _bdot(bvec, e, y, 0, n))
+        f, _, ok = _force(params, e, s[e], up[e], gp[e], _u_el(bvec, axial, rot, e, y, n))
         if not ok:
             return e
         mf[e] = mult[e] * f
     for i in range(n):
         # R = sum mult f b, each component summed in a register in the elements' order
         acc = 0.0
-        for e in range(bvec.shape[0]):
-            acc += mf[e] * bvec[e, i]
+        if i == rot:  # exact kinematics: the rotation's entry of b_e(q)
+            cs = math.cos(y[rot])
+            sn = math.sin(y[rot])
+            for e in range(bvec.shape[0]):
+                acc += mf[e] * (bvec[e, i] * cs - axial[e] * sn)
+        else:
+            for e in range(bvec.shape[0]):
+                acc += mf[e] * bvec[e, i]
         r[i] = acc
     for i in range(n):
         dy[i] = y[n + i]
@@ -140,16 +189,24 @@ def _dense(F, y_old, x, i):
 
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
-def _g_dense(F, y_old, x, bvec, e, s, n):
-    """s_e (b_e . v) on the dense output: positive while the element moves along its branch."""
-    w = bvec[e, 0] * _dense(F, y_old, x, n)
-    for i in range(1, n):
-        w += bvec[e, i] * _dense(F, y_old, x, n + i)
+def _g_dense(F, y_old, x, bvec, axial, rot, e, s, n):
+    """s_e (b_e(q) . v) on the dense output: positive while the element moves along its branch."""
+    if rot < 0:
+        w = bvec[e, 0] * _dense(F, y_old, x, n)
+        for i in range(1, n):
+            w += bvec[e, i] * _dense(F, y_old, x, n + i)
+        return s * w
+    w = 0.0
+    for i in range(n):
+        if i != rot:
+            w += bvec[e, i] * _dense(F, y_old, x, n + i)
+    th = _dense(F, y_old, x, rot)
+    w += (bvec[e, rot] * math.cos(th) - axial[e] * math.sin(th)) * _dense(F, y_old, x, n + rot)
     return s * w
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
-def _integrate(minv, bvec, mult, params, cm, brk, pcoef, sig, t_out, rtol, atol, init, y0, h_first, max_steps,
+def _integrate(minv, bvec, axial, rot, mult, params, cm, brk, pcoef, sig, t_out, rtol, atol, init, y0, h_first, max_steps,
                A, B, C, E3, E5, D, out_y, out_eu, out_ef, out_eh, info, el, vec, K, F, p, gs):
     """The whole integration; el (6, ne), vec (7, ny), K (16, ny), F (7, ny), p (4, max(n, ne)), gs (NS + 1,)
     are its work space (allocated by the caller: no reference counting in here), y0 (n,) the start.
@@ -206,7 +263,7 @@ def _integrate(minv, bvec, mult, params, cm, brk, pcoef, sig, t_out, rtol, atol,
 
     for k in range(n_int):
         tb = brk[k + 1]
-        bad = _rhs(t, y, k, brk, pcoef, sig, minv, bvec, mult, params, cm, s, up, gp, p, f)
+        bad = _rhs(t, y, k, brk, pcoef, sig, minv, bvec, axial, rot, mult, params, cm, s, up, gp, p, f)
         n_fev += 1
         if bad >= 0:
             info[R_STATUS] = ST_OVERFLOW
@@ -218,7 +275,7 @@ def _integrate(minv, bvec, mult, params, cm, brk, pcoef, sig, t_out, rtol, atol,
             while io < n_out and t_out[io] <= t:
                 for i in range(ny):
                     yo[i] = y[i]
-                io = _write(io, yo, bvec, mult, params, s, up, gp, ap, wacc, out_y, out_eu, out_ef, out_eh, n)
+                io = _write(io, yo, bvec, axial, rot, mult, params, s, up, gp, ap, wacc, out_y, out_eu, out_ef, out_eh, n)
         while tb - t > 1e-13 * max(1.0, abs(tb)):
             if n_steps + n_rej > max_steps:
                 info[R_STATUS] = ST_TOO_MANY_STEPS
@@ -234,7 +291,7 @@ def _integrate(minv, bvec, mult, params, cm, brk, pcoef, sig, t_out, rtol, atol,
             # ---- one DOP853 step
             for i in range(ny):
                 K[0, i] = f[i]
-            bad = _stages(1, 12, t, hh, y, k, brk, pcoef, sig, minv, bvec, mult, params, cm, s, up, gp, p, A, C, K, ytmp)
+            bad = _stages(1, 12, t, hh, y, k, brk, pcoef, sig, minv, bvec, axial, rot, mult, params, cm, s, up, gp, p, A, C, K, ytmp)
             n_fev += 11
             if bad < 0:
                 for i in range(ny):
@@ -242,7 +299,7 @@ def _integrate(minv, bvec, mult, params, cm, brk, pcoef, sig, t_out, rtol, atol,
                     for j in range(12):
                         acc += B[j] * K[j, i]
                     y_new[i] = y[i] + hh * acc
-                bad = _rhs(t + hh, y_new, k, brk, pcoef, sig, minv, bvec, mult, params, cm, s, up, gp, p, f_new)
+                bad = _rhs(t + hh, y_new, k, brk, pcoef, sig, minv, bvec, axial, rot, mult, params, cm, s, up, gp, p, f_new)
                 n_fev += 1
             if bad >= 0:
                 # an exponential overflowed inside the step: try a smaller one first
@@ -285,14 +342,14 @@ def _integrate(minv, bvec, mult, params, cm, brk, pcoef, sig, t_out, rtol, atol,
             # ---- events: an element's velocity crossing zero against its branch
             need = False
             for e in range(ne):
-                g0 = s[e] * _bdot(bvec, e, y, n, n)
-                g1 = s[e] * _bdot(bvec, e, y_new, n, n)
+                g0 = s[e] * _v_el(bvec, axial, rot, e, y, n)
+                g1 = s[e] * _v_el(bvec, axial, rot, e, y_new, n)
                 if g1 < 0.0:
                     need = True
                     break
                 # cubic Hermite of g over the step, from g and g' at both ends
-                d0 = hh * s[e] * _bdot(bvec, e, f, n, n)
-                d1 = hh * s[e] * _bdot(bvec, e, f_new, n, n)
+                d0 = hh * s[e] * _a_el(bvec, axial, rot, e, y, f, n)
+                d1 = hh * s[e] * _a_el(bvec, axial, rot, e, y_new, f_new, n)
                 seen = g0 > 0.0
                 for m in range(1, NS):
                     x = m / NS
@@ -312,17 +369,17 @@ def _integrate(minv, bvec, mult, params, cm, brk, pcoef, sig, t_out, rtol, atol,
             ev = -1
             x_ev = 2.0
             if need:
-                _dense_coefficients(t, hh, y, y_new, f, f_new, k, brk, pcoef, sig, minv, bvec, mult, params,
+                _dense_coefficients(t, hh, y, y_new, f, f_new, k, brk, pcoef, sig, minv, bvec, axial, rot, mult, params,
                                     cm, s, up, gp, p, A, C, D, K, F, ytmp)
                 n_fev += 3
                 have_dense = True
                 for e in range(ne):
                     xroot[e] = 2.0
                     se = s[e]
-                    gs[0] = se * _bdot(bvec, e, y, n, n)
-                    gs[NS] = se * _bdot(bvec, e, y_new, n, n)
+                    gs[0] = se * _v_el(bvec, axial, rot, e, y, n)
+                    gs[NS] = se * _v_el(bvec, axial, rot, e, y_new, n)
                     for m in range(1, NS):
-                        gs[m] = _g_dense(F, y, m / NS, bvec, e, se, n)
+                        gs[m] = _g_dense(F, y, m / NS, bvec, axial, rot, e, se, n)
                     seen = gs[0] > 0.0
                     found = -1
                     for m in range(1, NS + 1):
@@ -351,7 +408,7 @@ def _integrate(minv, bvec, mult, params, cm, brk, pcoef, sig, t_out, rtol, atol,
                         xm = (xa * gb - xb * ga) / (gb - ga) if ga != gb else 0.5 * (xa + xb)
                         if not (xa < xm < xb):
                             xm = 0.5 * (xa + xb)
-                        gm = _g_dense(F, y, xm, bvec, e, se, n)
+                        gm = _g_dense(F, y, xm, bvec, axial, rot, e, se, n)
                         if gm == 0.0:
                             xa = xm
                             xb = xm
@@ -377,9 +434,9 @@ def _integrate(minv, bvec, mult, params, cm, brk, pcoef, sig, t_out, rtol, atol,
                 # a branch chosen against the motion (a virgin element, or round-off at a reversal)
                 for e in range(ne):
                     if xroot[e] == 0.0:
-                        _new_branch(e, y, bvec, params, s, up, gp, ap, wacc, n)
+                        _new_branch(e, y, bvec, axial, rot, params, s, up, gp, ap, wacc, n)
                         n_start += 1
-                bad = _rhs(t, y, k, brk, pcoef, sig, minv, bvec, mult, params, cm, s, up, gp, p, f)
+                bad = _rhs(t, y, k, brk, pcoef, sig, minv, bvec, axial, rot, mult, params, cm, s, up, gp, p, f)
                 n_fev += 1
                 if n_start > 100 * (n_ev + n_steps + 10):
                     info[R_STATUS] = ST_STEP_TOO_SMALL
@@ -393,33 +450,25 @@ def _integrate(minv, bvec, mult, params, cm, brk, pcoef, sig, t_out, rtol, atol,
                     x = (t_out[io] - t) / hh
                     for i in range(ny):
                         yo[i] = _dense(F, y, x, i)
-                    io = _write(io, yo, bvec, mult, params, s, up, gp, ap, wacc, out_y, out_eu, out_ef, out_eh, n)
-                # redo the step to the reversal exactly
+                    io = _write(io, yo, bvec, axial, rot, mult, params, s, up, gp, ap, wacc, out_y, out_eu, out_ef, out_eh, n)
+                # the state at the reversal from the step's dense output (7th order, within the
+                # step's tolerance: the step was accepted), not from the step redone to it
                 h_ev = t_ev - t
-                if h_ev > 0.0:
-                    _stages(1, 12, t, h_ev, y, k, brk, pcoef, sig, minv, bvec, mult, params, cm, s, up, gp, p, A, C, K, ytmp)
-                    n_fev += 11
-                    for i in range(ny):
-                        acc = 0.0
-                        for j in range(12):
-                            acc += B[j] * K[j, i]
-                        y_ev[i] = y[i] + h_ev * acc
-                else:
-                    for i in range(ny):
-                        y_ev[i] = y[i]
+                for i in range(ny):
+                    y_ev[i] = _dense(F, y, x_ev, i) if h_ev > 0.0 else y[i]
                 t = t_ev
                 for i in range(ny):
                     y[i] = y_ev[i]
                 while io < n_out and t_out[io] <= t:
-                    io = _write(io, y, bvec, mult, params, s, up, gp, ap, wacc, out_y, out_eu, out_ef, out_eh, n)
+                    io = _write(io, y, bvec, axial, rot, mult, params, s, up, gp, ap, wacc, out_y, out_eu, out_ef, out_eh, n)
                 # elements that reverse together (identical b and sets, or by chance within
                 # SIMULTANEOUS of the step) all start their new branches here
                 for e in range(ne):
                     if xroot[e] <= x_ev + SIMULTANEOUS:
-                        _new_branch(e, y, bvec, params, s, up, gp, ap, wacc, n)
+                        _new_branch(e, y, bvec, axial, rot, params, s, up, gp, ap, wacc, n)
                         n_ev += 1
                 n_steps += 1
-                bad = _rhs(t, y, k, brk, pcoef, sig, minv, bvec, mult, params, cm, s, up, gp, p, f)
+                bad = _rhs(t, y, k, brk, pcoef, sig, minv, bvec, axial, rot, mult, params, cm, s, up, gp, p, f)
                 n_fev += 1
                 if h_ev > 0.0:
                     h_min_seen = min(h_min_seen, h_ev)
@@ -427,14 +476,14 @@ def _integrate(minv, bvec, mult, params, cm, brk, pcoef, sig, t_out, rtol, atol,
             # ---- accept the whole step
             while io < n_out and t_out[io] < t + hh:
                 if not have_dense:
-                    _dense_coefficients(t, hh, y, y_new, f, f_new, k, brk, pcoef, sig, minv, bvec, mult, params,
+                    _dense_coefficients(t, hh, y, y_new, f, f_new, k, brk, pcoef, sig, minv, bvec, axial, rot, mult, params,
                                         cm, s, up, gp, p, A, C, D, K, F, ytmp)
                     n_fev += 3
                     have_dense = True
                 x = (t_out[io] - t) / hh
                 for i in range(ny):
                     yo[i] = _dense(F, y, x, i)
-                io = _write(io, yo, bvec, mult, params, s, up, gp, ap, wacc, out_y, out_eu, out_ef, out_eh, n)
+                io = _write(io, yo, bvec, axial, rot, mult, params, s, up, gp, ap, wacc, out_y, out_eu, out_ef, out_eh, n)
             clipped = hh < h
             t = tb if hh == tb - t else t + hh
             for i in range(ny):
@@ -445,7 +494,7 @@ def _integrate(minv, bvec, mult, params, cm, brk, pcoef, sig, t_out, rtol, atol,
             h_max_seen = max(h_max_seen, hh)
             h = max(h, hh * factor) if clipped else hh * factor
             while io < n_out and t_out[io] <= t:
-                io = _write(io, y, bvec, mult, params, s, up, gp, ap, wacc, out_y, out_eu, out_ef, out_eh, n)
+                io = _write(io, y, bvec, axial, rot, mult, params, s, up, gp, ap, wacc, out_y, out_eu, out_ef, out_eh, n)
             finite = True
             for i in range(n):
                 finite = finite and math.isfinite(y[i])
@@ -455,7 +504,7 @@ def _integrate(minv, bvec, mult, params, cm, brk, pcoef, sig, t_out, rtol, atol,
                 return io
     # outputs left by round-off at the very end
     while io < n_out:
-        io = _write(io, y, bvec, mult, params, s, up, gp, ap, wacc, out_y, out_eu, out_ef, out_eh, n)
+        io = _write(io, y, bvec, axial, rot, mult, params, s, up, gp, ap, wacc, out_y, out_eu, out_ef, out_eh, n)
     info[R_STATUS] = ST_OK
     info[R_STEPS] = n_steps
     info[R_REJECTED] = n_rej
@@ -468,7 +517,7 @@ def _integrate(minv, bvec, mult, params, cm, brk, pcoef, sig, t_out, rtol, atol,
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
-def _stages(first, last, t, hh, y, k, brk, pcoef, sig, minv, bvec, mult, params, cm, s, up, gp, p, A, C, K, ytmp):
+def _stages(first, last, t, hh, y, k, brk, pcoef, sig, minv, bvec, axial, rot, mult, params, cm, s, up, gp, p, A, C, K, ytmp):
     """Runge-Kutta stages first..last-1 of a step hh from (t, y) into the rows of K;
     returns the first element whose exponential overflowed, or -1."""
     for st in range(first, last):
@@ -477,17 +526,17 @@ def _stages(first, last, t, hh, y, k, brk, pcoef, sig, minv, bvec, mult, params,
             for j in range(st):
                 acc += A[st, j] * K[j, i]
             ytmp[i] = y[i] + hh * acc
-        bad = _rhs(t + C[st] * hh, ytmp, k, brk, pcoef, sig, minv, bvec, mult, params, cm, s, up, gp, p, K[st])
+        bad = _rhs(t + C[st] * hh, ytmp, k, brk, pcoef, sig, minv, bvec, axial, rot, mult, params, cm, s, up, gp, p, K[st])
         if bad >= 0:
             return bad
     return -1
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
-def _dense_coefficients(t, hh, y, y_new, f, f_new, k, brk, pcoef, sig, minv, bvec, mult, params, cm, s, up, gp, p,
+def _dense_coefficients(t, hh, y, y_new, f, f_new, k, brk, pcoef, sig, minv, bvec, axial, rot, mult, params, cm, s, up, gp, p,
                         A, C, D, K, F, ytmp):
     """The three extra stages and the 7 rows of DOP853's dense output (as scipy's DOP853)."""
-    _stages(13, 16, t, hh, y, k, brk, pcoef, sig, minv, bvec, mult, params, cm, s, up, gp, p, A, C, K, ytmp)
+    _stages(13, 16, t, hh, y, k, brk, pcoef, sig, minv, bvec, axial, rot, mult, params, cm, s, up, gp, p, A, C, K, ytmp)
     for i in range(2 * len(minv) + 2):
         dy = y_new[i] - y[i]
         F[0, i] = dy
@@ -501,9 +550,9 @@ def _dense_coefficients(t, hh, y, y_new, f, f_new, k, brk, pcoef, sig, minv, bve
 
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
-def _new_branch(e, y, bvec, params, s, up, gp, ap, wacc, n):
+def _new_branch(e, y, bvec, axial, rot, params, s, up, gp, ap, wacc, n):
     """Element e reverses at the current state: a new branch from the force it has (eq. 14)."""
-    u = _bdot(bvec, e, y, 0, n)
+    u = _u_el(bvec, axial, rot, e, y, n)
     f_old, big_old, _ = _force(params, e, s[e], up[e], gp[e], u)
     alpha = params[e, branch_row(s[e]), ALPHA]
     wacc[e] += big_old - ap[e] + s[e] * gp[e] * (math.exp(-s[e] * alpha * (u - up[e])) - 1.0) / alpha
@@ -516,12 +565,12 @@ def _new_branch(e, y, bvec, params, s, up, gp, ap, wacc, n):
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
-def _write(io, y, bvec, mult, params, s, up, gp, ap, wacc, out_y, out_eu, out_ef, out_eh, n):
+def _write(io, y, bvec, axial, rot, mult, params, s, up, gp, ap, wacc, out_y, out_eu, out_ef, out_eh, n):
     """One output row from the state y on the current branches: the state, each element row's
     deformation and force, the hysteretic work."""
     eh = 0.0
     for e in range(bvec.shape[0]):
-        u = _bdot(bvec, e, y, 0, n)
+        u = _u_el(bvec, axial, rot, e, y, n)
         fe, big, _ = _force(params, e, s[e], up[e], gp[e], u)
         alpha = params[e, branch_row(s[e]), ALPHA]
         w = wacc[e] + big - ap[e] + s[e] * gp[e] * (math.exp(-s[e] * alpha * (u - up[e])) - 1.0) / alpha

@@ -82,7 +82,7 @@ def sym_max_eig(a, n):
 
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
-def update_elements(bvec, mult, params, q, st, cur, kpeak, r, n):
+def update_elements(bvec, axial, rot, mult, params, q, st, cur, kpeak, r, bq, n):
     """Elements at the new configuration q (n,) (eqs. 5-11): u_e = b_e . q, R = sum mult b f.
 
     st: (2, ne, 6) element states; st[cur] holds the state at the start of the step
@@ -91,19 +91,41 @@ def update_elements(bvec, mult, params, q, st, cur, kpeak, r, n):
     the largest tangent over the step and the tangent at its end; r (n,) the restoring force.
     n = bvec.shape[1], given by the caller: inlined into a kernel where it is a compile-time
     constant (rbhyst.solve.kernels.loop), every loop over the coordinates unrolls.
-    Returns (ok, bad element, work of all element forces over the step).
+    rot >= 0: exact kinematics about the coordinate q[rot] (rbhyst.model.kinematics):
+    u_e = sum_i b_i q_i (i != rot) + b_rot sin(theta) + axial_e (cos(theta) - 1), its row
+    b_e(q) = du_e/dq into bq (ne, n), and the geometric stiffness sum mult f d2u_e/dtheta2
+    returned; rot < 0: the seed's rows, bq untouched.
+    Returns (ok, bad element, work of all element forces over the step, geometric stiffness).
     """
     for i in range(n):
         r[i] = 0.0
     work = 0.0
+    kgeo = 0.0
+    sn = 0.0
+    cs = 1.0
+    cm1 = 0.0
+    if rot >= 0:
+        sn = math.sin(q[rot])
+        cs = math.cos(q[rot])
+        half = math.sin(0.5 * q[rot])
+        cm1 = -2.0 * half * half  # cos - 1 without cancellation
     for e in range(bvec.shape[0]):
-        u = bvec[e, 0] * q[0]
-        for i in range(1, n):
-            u += bvec[e, i] * q[i]
+        if rot >= 0:
+            u = 0.0
+            for i in range(n):
+                if i != rot:
+                    u += bvec[e, i] * q[i]
+                    bq[e, i] = bvec[e, i]
+            u += bvec[e, rot] * sn + axial[e] * cm1
+            bq[e, rot] = bvec[e, rot] * cs - axial[e] * sn
+        else:
+            u = bvec[e, 0] * q[0]
+            for i in range(1, n):
+                u += bvec[e, i] * q[i]
         f, s, g, k, a, kstart, w, ok = vrm_update(params, e, st[cur, e, U], st[cur, e, F], st[cur, e, S],
                                                   st[cur, e, G], st[cur, e, K], st[cur, e, A], u)
         if not ok:
-            return False, e, work
+            return False, e, work, kgeo
         nxt = 1 - cur
         st[nxt, e, U] = u
         st[nxt, e, F] = f
@@ -116,9 +138,34 @@ def update_elements(bvec, mult, params, q, st, cur, kpeak, r, n):
         m = mult[e]
         work += m * w
         mf = m * f
+        if rot >= 0:
+            for i in range(n):
+                r[i] += mf * bq[e, i]
+            kgeo -= mf * (bvec[e, rot] * sn + axial[e] * cs)
+        else:
+            for i in range(n):
+                r[i] += mf * bvec[e, i]
+    return True, -1, work, kgeo
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def start_rows(bvec, axial, rot, mult, st, cur, q, r, n):
+    """r (n,) = R at the start of a step, sum mult f b_e(q) from the forces in st[cur] (the
+    rows at q where the kinematics are exact, rot >= 0)."""
+    for i in range(n):
+        r[i] = 0.0
+    sn = 0.0
+    cs = 1.0
+    if rot >= 0:
+        sn = math.sin(q[rot])
+        cs = math.cos(q[rot])
+    for e in range(bvec.shape[0]):
+        mf = mult[e] * st[cur, e, 1]
         for i in range(n):
-            r[i] += mf * bvec[e, i]
-    return True, -1, work
+            if i == rot:
+                r[i] += mf * (bvec[e, i] * cs - axial[e] * sn)
+            else:
+                r[i] += mf * bvec[e, i]
 
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)

@@ -31,12 +31,13 @@ def _fail(info, status, element, t):
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
-def run_chunk(method, coef, mass, minv, cm, damped, bvec, mult, params, wgt,
+def run_chunk(method, coef, mass, minv, cm, damped, bvec, axial, rot, mult, params, wgt,
               load, t0, h_c, nsub_c, n_steps, omega_dt_limit, min_level, max_level, newton_tol, newton_max_iter,
-              x, st, st_save, kpeak, w, wm, out_d, out_v, out_u, out_f, out_e, info):
+              x, st, st_save, kpeak, bq, w, wm, out_d, out_v, out_u, out_f, out_e, info):
     """Advance the state x, st over n_steps output steps of nsub_c compute steps of h_c each.
 
-    mass, minv: the diagonals of M and M^-1 as tuples of n (n is their length).
+    mass, minv: the diagonals of M and M^-1 as tuples of n (n is their length). axial, rot: the
+    kinematics, bq (ne, n) work space for the rows b_e(q) (rbhyst.solve.kernels.elements.update_elements).
     load: (n_steps * nsub_c + 1, n) generalized load on the compute grid from the chunk's
     start time t0. Row k of out_* receives the state after output step k + 1. out_e columns:
     input energy, kinetic energy, hysteretic work, viscous work (cumulative).
@@ -95,8 +96,8 @@ def run_chunk(method, coef, mass, minv, cm, damped, bvec, mult, params, wgt,
                 w0 = k * inv_nsub
                 w1 = (k + 1) * inv_nsub
                 ok, bad, work, its = take_step(
-                    method, coef, level, mass, minv, cm, damped, bvec, mult, params, st, cur, w, wm,
-                    load, j, w0, w1, h, kpeak, newton_tol, newton_max_iter)
+                    method, coef, level, mass, minv, cm, damped, bvec, axial, rot, mult, params, st, cur, w, wm,
+                    load, j, w0, w1, h, kpeak, bq, newton_tol, newton_max_iter)
                 iterations += its
                 steps_taken += 1
                 t_now = t0 + (j + w1) * h_c
@@ -112,7 +113,7 @@ def run_chunk(method, coef, mass, minv, cm, damped, bvec, mult, params, wgt,
                 # resolution check on the stiffest instantaneous mode of the step
                 lam, worst = omega_squared(mult, kpeak, wgt)
                 if lam * h * h > limit2:
-                    lam = omega_squared_exact(bvec, mult, minv, kpeak, wm, w[W_Q])
+                    lam = omega_squared_exact(bq if rot >= 0 else bvec, mult, minv, kpeak, wm, w[W_Q])
                     if lam * h * h > limit2:
                         if level >= max_level:
                             _fail(info, UNRESOLVED, worst, t_now)

@@ -1,0 +1,98 @@
+"""Exact planar kinematics of the rigid body: rotations of any size, in numpy.
+
+The seed linearises the motion of a body point in theta3 (eqs. 7-8). With exact kinematics a
+point at r from G (in the body at rest) is at x_G + R(theta) r, R the rotation by theta about
+x3, and moves by
+
+    u_P = u_G + (R(theta) - I) r.
+
+Each element keeps the line of action it has at rest, fixed in the ground (as the seed draws
+it from its support, and as a mount's base holds it): it deforms by the displacement of its
+body point along that line, d . u_P, and its force acts along d at the point's current place:
+
+    u_e = d1 u1 + d2 u2 + b3 sin(theta) + c (cos(theta) - 1),
+    b3 = d . (k x r) = r1 d2 - r2 d1 (the seed's row), c = d . r (the axial offset),
+
+whose derivative b_e(q) = (d1, d2, b3 cos(theta) - c sin(theta)) carries the element's force
+back to G (virtual work: the moment about G of the force at the turned point is exact). To
+first order in theta these are the seed's u_e = b . q. The mass matrix about G stays
+diag(m, m, J): in the plane there is no gyroscopic term. The compiled kernels carry the same
+formulas (rbhyst.solve.kernels.elements.update_elements).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def rows_at(bvec: np.ndarray, axial: np.ndarray | None, rot: int, q: np.ndarray) -> np.ndarray:
+    """(ne, n) the rows b_e(q) = du_e/dq at the configuration q (n,): the seed's b_e where the
+    kinematics are small (rot < 0)."""
+    rows = np.array(bvec, dtype=float, copy=True)
+    if rot >= 0:
+        th = float(q[rot])
+        rows[:, rot] = bvec[:, rot] * np.cos(th) - axial * np.sin(th)
+    return rows
+
+
+def turned(x, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(R(theta) x) for the point x (2,) from G at every rotation theta (k,): its two components."""
+    c, s = np.cos(theta), np.sin(theta)
+    return c * x[0] - s * x[1], s * x[0] + c * x[1]
+
+
+def point_motion_exact(d: np.ndarray, v: np.ndarray, at: np.ndarray, x, theta: np.ndarray,
+                       origin_theta: float = 0.0, out: np.ndarray | None = None) -> np.ndarray:
+    """(k, 4) a body point's displacements u_P1, u_P2 and total accelerations at_P1, at_P2.
+
+    d: (k, 3) G's displacements (u1, u2, and the rotation measured from the start), v (k, 3) its
+    velocities, at (k, 3) its total accelerations (at1, at2, alphat3); theta (k,) the rotation
+    from the body at rest (the start plus d[:, 2]); x the point from G at rest (m). The point's
+    displacement is measured from where it is at the start (rotation origin_theta):
+    u_P = u_G + (R(theta) - R(theta0)) x, and a_P = a_G + alpha k x (R x) - omega^2 (R x).
+    """
+    x = np.asarray(x, dtype=float)
+    if out is None:
+        out = np.empty((len(d), 4))
+    r1, r2 = turned(x, theta)
+    o1, o2 = turned(x, np.array([origin_theta]))
+    w2 = v[:, 2] * v[:, 2]
+    out[:, 0] = d[:, 0] + (r1 - o1[0])
+    out[:, 1] = d[:, 1] + (r2 - o2[0])
+    out[:, 2] = at[:, 0] - at[:, 2] * r2 - w2 * r1
+    out[:, 3] = at[:, 1] + at[:, 2] * r1 - w2 * r2
+    return out
+
+
+def exact_twin(system):
+    """The same scene with exact kinematics: each kernel row split where its elements' points lie
+    differently along their line of action (they deform alike only to first order), before
+    any static equilibrium (the exact one differs). None where exact kinematics do not cover
+    the scene (rbhyst.model.system.exact_limits says what)."""
+    from dataclasses import replace
+
+    from rbhyst.model.coordinates import PLANE
+    from rbhyst.model.system import axial_offset, exact_limits
+
+    if system.coordinates != PLANE or exact_limits(system):
+        return None
+    if system.kinematics == "exact":
+        return system
+    keys, rows, elements = {}, [], []
+    for el in system.elements:
+        c = axial_offset(el.x[0], el.x[1], np.radians(el.angle_deg))
+        key = (el.row, round(c / 1e-12))
+        if key not in keys:
+            keys[key] = len(rows)
+            rows.append((el.row, c))
+        elements.append(replace(el, row=keys[key]))
+    mult = np.zeros(len(rows))
+    for el in elements:
+        mult[el.row] += el.count
+    old = [r for r, _ in rows]
+    excitation = system.excitation
+    if system.static is not None:  # the weight enters again with the exact equilibrium
+        excitation = replace(excitation, constant=(0.0,) * system.n)
+    return replace(system, bvec=system.bvec[old], mult=mult, params=system.params[old], k0=system.k0[old],
+                   k_reversal=system.k_reversal[old], elements=tuple(elements), static=None, excitation=excitation,
+                   kinematics="exact", axial=np.array([c for _, c in rows]))

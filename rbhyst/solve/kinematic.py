@@ -1,0 +1,158 @@
+"""The error a run carries from its kinematics: the seed's small rotations against exact ones.
+
+The seed's kinematics (eqs. 7-8) drop the terms of second order in theta3: a point at r from G
+is off by about |r| theta^2 / 2, and an element's force f, acting at its turned point, has a
+moment about G that differs by f (b3 (cos theta - 1) - c sin theta). The second is not small
+beside the rotation's own share where the forces are large against the motion: a shear force
+at a point level with G, or the weight W carried by the mounts (P-Delta, W h theta for G at h
+above them: it softens rocking at any amplitude). So the run first measures, along its own
+compared rows, how large those neglected terms are against each column they enter (element
+deformations, the moment resultant, the points' motion): where the largest share exceeds
+CHECK_FRACTION x warn_error, the same scene is run again with exact kinematics
+(rbhyst.model.kinematics), same method and step, and the difference of every column the error
+estimate compares is the error the run carries from its model. A run with exact kinematics
+carries none.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from rbhyst.errors import AnalysisError
+
+#: the kinematic difference is computed where theta_max / 2 exceeds this fraction of warn_error
+CHECK_FRACTION = 0.1
+
+
+def kinematics_summary(result, settings) -> dict:
+    """summary.json's ``kinematics``: the model, the largest rotation, and the difference from
+    exact kinematics per column where the rotation makes it matter (see the module docstring)."""
+    from rbhyst.model.kinematics import exact_twin
+    from rbhyst.model.system import exact_limits
+
+    system = result.system
+    rot = next((j for j, c in enumerate(system.coordinates) if c.rotation), None)
+    out: dict = {"model": system.kinematics}
+    if rot is None:
+        return out
+    key = system.coordinates[rot].column("d")
+    start = float(system.static.q[rot]) if system.static is not None else 0.0
+    e = result.extremes
+    i = e.names.index(key)
+    theta = max(abs(start + e.max[i]), abs(start + e.min[i]))
+    out["max_rotation_rad"] = theta
+    if system.kinematics == "exact":
+        out["difference"] = None
+        out["method"] = "exact rotations: no kinematic error"
+        return out
+    if result.compared is None:
+        out["difference"] = None
+        out["method"] = "not computed: the run kept no rows to compare"
+        return out
+    indicator, where = model_residual(result, start)
+    out["neglected"] = {"column": where, "share": indicator}
+    if indicator <= CHECK_FRACTION * settings.warn_error:
+        out["difference"] = None
+        out["method"] = (f"not computed: the terms the small rotations neglect reach {indicator:.3g} of {where} "
+                         f"along the run, below {CHECK_FRACTION:g} x warn_error")
+        return out
+    twin = exact_twin(system)
+    if twin is None:
+        out["difference"] = None
+        out["method"] = "not computed: " + "; ".join(exact_limits(system))
+        return out
+    from rbhyst.solve.estimate import column_errors
+    from rbhyst.solve.plan import prepare
+
+    s = dataclasses.replace(settings, estimate=False, spectra=None)
+    try:
+        exact = prepare(twin, s).run(keep=False, compare_every=result.compare_every)
+    except AnalysisError as err:
+        out["difference"] = None
+        out["method"] = f"not computed: the run with exact kinematics failed: {err}"
+        return out
+    if exact.compared is None or exact.compared.shape != result.compared.shape:
+        out["difference"] = None
+        out["method"] = "not computed: the run with exact kinematics compares other rows"
+        return out
+    from rbhyst.solve.history import estimate_columns
+
+    columns = estimate_columns(result.layout)
+    keys = [k for k, _, _ in columns]
+    diff = column_errors(result.compared[:, 1:], exact.compared[:, 1:], keys, [f for _, _, f in columns], system)
+    out["difference"] = dict(zip(keys, map(float, diff)))
+    worst = int(np.argmax(diff))
+    out["worst"] = {"column": keys[worst], "difference": float(diff[worst])}
+    out["method"] = (f"the same run with exact kinematics ({settings.integrator}, dt = {settings.dt:g} s), "
+                     "max_t |small - exact| / max_t |exact| per column")
+    return out
+
+
+def model_residual(result, start: float) -> tuple[float, str]:
+    """The largest share of a column that the small rotations' neglected terms reach along the
+    run's compared rows: (share, column key). Element deformations (b3 (sin theta - theta) +
+    c (cos theta - 1) against the element's peak force over k0: the rows hold forces), the
+    moment resultant (sum f (b3 (cos theta - 1) - c sin theta) against R3's peak) and each
+    point's motion (|x| theta^2 / 2 against its peak). An indicator of where to look, not a
+    bound: the response may amplify a residual."""
+    from rbhyst.model.system import axial_offset
+    from rbhyst.solve.history import estimate_columns
+
+    system, layout = result.system, result.layout
+    columns = {k: i for i, (k, _, _) in enumerate(estimate_columns(layout))}
+    rows = result.compared[:, 1:]
+    rot = next(j for j, c in enumerate(system.coordinates) if c.rotation)
+    theta = start + rows[:, columns[system.coordinates[rot].key("d")]]
+    sn, cm1 = np.sin(theta), np.cos(theta) - 1.0
+    b3 = system.expand(system.bvec[None, :, rot])[0]
+    c = np.array([axial_offset(el.x[0], el.x[1], np.radians(el.angle_deg))
+                  for el in system.elements for _ in range(el.count)])
+    k0 = system.expand(system.k0[None, :])[0]
+    forces = np.column_stack([rows[:, columns[f"e{k}_f"]] for k in range(1, len(b3) + 1)])
+    best, where = 0.0, ""
+    # each element's deformation error against its deformation (its force over k0: the rows
+    # compare forces, not deformations)
+    du = b3[None, :] * (sn - theta)[:, None] + c[None, :] * cm1[:, None]
+    scale = np.max(np.abs(forces), axis=0) / np.maximum(k0, 1e-300)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        share = np.where(scale > 0, np.max(np.abs(du), axis=0) / scale, 0.0)
+    if share.size and share.max() > best:
+        best, where = float(share.max()), f"e{int(share.argmax()) + 1}_u"
+    key = system.coordinates[rot].key("R")
+    dr = np.sum(forces * (b3[None, :] * cm1[:, None] - c[None, :] * sn[:, None]), axis=1)
+    top = np.max(np.abs(rows[:, columns[key]]))
+    if top > 0 and np.max(np.abs(dr)) / top > best:
+        best, where = float(np.max(np.abs(dr)) / top), key
+    for name, x in layout.points:
+        keys = [k for k in columns if k.startswith(f"{name}_") and k[len(name) + 1:].startswith("u")]
+        top = max(np.max(np.abs(rows[:, columns[k]])) for k in keys) if keys else 0.0
+        miss = float(np.hypot(*x[:2])) * float(np.max(np.abs(theta))) ** 2 / 2
+        if top > 0 and miss / top > best:
+            best, where = miss / top, keys[0]
+    return best, where
+
+
+def kinematics_warning(kinematics: dict | None, warn_error: float) -> list[str]:
+    """One warning where the small rotations cost more than warn_error (or may, where it was
+    not computed), with the numbers and what to do."""
+    if not kinematics or kinematics.get("model") != "small" or "max_rotation_rad" not in kinematics:
+        return []
+    theta = kinematics["max_rotation_rad"]
+    diff = kinematics.get("difference")
+    if diff:
+        worst = kinematics["worst"]
+        if worst["difference"] <= warn_error:
+            return []
+        more = sorted(((v, k) for k, v in diff.items() if v > warn_error and k != worst["column"]), reverse=True)
+        also = f" (also {', '.join(f'{k} {v:.3g}' for v, k in more[:4])}{' ...' if len(more) > 4 else ''})" if more else ""
+        return [f"the seed's small rotations (eqs. 7-8) differ from exact kinematics by {worst['difference']:.2%} in "
+                f"{worst['column']}{also}, above analysis.warn_error = {warn_error:g}; the body turns by up to "
+                f"{theta:.3g} rad: set analysis.kinematics = \"exact\""]
+    neglected = kinematics.get("neglected") or {}
+    if neglected.get("share", 0.0) > warn_error:
+        return [f"the terms the seed's small rotations (eqs. 7-8) neglect reach {neglected['share']:.2%} of "
+                f"{neglected['column']} (the body turns by up to {theta:.3g} rad), above analysis.warn_error = "
+                f"{warn_error:g}; the difference from exact kinematics was {kinematics['method']}"]
+    return []

@@ -1,0 +1,247 @@
+"""Exact planar kinematics (analysis.kinematics = "exact") against an independent integration of
+the exact equations of a square body on linear springs, written here from forces and moments
+(not from the rows b_e(q) the kernels use); and small against exact on small motions."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+from conftest import linear_set
+from rbhyst.model.deck import parse_deck
+from rbhyst.model.settings import settings_from_deck
+from rbhyst.model.system import assemble
+from rbhyst.solve.plan import simulate
+
+K, MASS, C = 2.0e4, 500.0, 0.5  # N/m each spring, kg, half side (m)
+J = MASS * (2 * C) ** 2 / 6.0  # a uniform square about G
+#: the springs: point from G, line of action (angle); at the corners, so that each point also
+#: lies along its line (d . r != 0) and the rows turn with the body
+SPRINGS = (((C, C), 0.0), ((-C, -C), 0.0), ((C, -C), 90.0), ((-C, C), 90.0), ((C, 0.0), 45.0))
+PULSE = {"type": "half-sine", "units": "N m", "duration": 0.25}
+MOMENT, FORCE = 4.0e3, 1.5e3  # N m, N: peaks of the half-sine pulses
+FIXED_STEP = ("chang", "central-difference", "newmark", "kr-alpha")
+
+
+def deck(kinematics: str, moment: float, force: float = 0.0, duration: float = 1.5, dt: float = 1e-3) -> dict:
+    out = {
+        "body": {"vertices": [[-C, -C], [C, -C], [C, C], [-C, C]], "mass": MASS},
+        "hysteresis": {"lin": linear_set(K)},
+        "elements": [{"point": list(x), "angle_deg": a, "hysteresis": "lin"} for x, a in SPRINGS],
+        "excitation": {"force": {"m3": dict(PULSE, amplitude=moment)}},
+        "analysis": {"dt": dt, "duration": duration, "kinematics": kinematics},
+        "output": {"points": [{"name": "corner", "point": [C, C]}]},
+    }
+    if force:
+        out["excitation"]["force"]["p1"] = {"type": "half-sine", "units": "N", "duration": 0.25, "amplitude": force}
+    return out
+
+
+def scene(data, tmp_path):
+    """(System, Settings) of a deck given as a dict."""
+    d = parse_deck(data)
+    return assemble(d, tmp_path), dataclasses.replace(settings_from_deck(d), estimate=False)
+
+
+def run(scene_, **overrides):
+    system, settings = scene_
+    return simulate(system, dataclasses.replace(settings, **overrides))
+
+
+ADAPTIVE = {"integrator": "adaptive", "rtol": 1e-11}
+
+
+def independent(moment: float, force: float, t_out: np.ndarray) -> np.ndarray:
+    """(len(t_out), 6) (x1, x2, theta, v1, v2, omega) of the exact planar equations: each spring
+    along its fixed direction d pulls at its body point, now at x_G + R(theta) r, with the
+    force -k (d . u_P) d, whose moment about G is (R r) x F; scipy's DOP853 at rtol 1e-12."""
+    def pulse(t, amp):
+        return amp * math.sin(math.pi * t / 0.25) if t < 0.25 else 0.0
+
+    def rhs(t, y):
+        x1, x2, th, v1, v2, w = y
+        c, s = math.cos(th), math.sin(th)
+        f1 = pulse(t, force)
+        f2 = 0.0
+        m = pulse(t, moment)
+        for (r1, r2), a in SPRINGS:
+            d1, d2 = math.cos(math.radians(a)), math.sin(math.radians(a))
+            p1, p2 = c * r1 - s * r2, s * r1 + c * r2  # R r
+            u = d1 * (x1 + p1 - r1) + d2 * (x2 + p2 - r2)
+            fx, fy = -K * u * d1, -K * u * d2
+            f1 += fx
+            f2 += fy
+            m += p1 * fy - p2 * fx
+        return [v1, v2, w, f1 / MASS, f2 / MASS, m / J]
+
+    sol = solve_ivp(rhs, (0.0, t_out[-1]), np.zeros(6), method="DOP853", rtol=1e-12, atol=1e-14, t_eval=t_out,
+                    max_step=0.01)
+    assert sol.success
+    return sol.y.T
+
+
+@pytest.fixture(scope="module")
+def large(tmp_path_factory):
+    """A moment pulse that turns the body by about 0.3 rad."""
+    return scene(deck("exact", moment=MOMENT, force=FORCE), tmp_path_factory.mktemp("k"))
+
+
+def test_the_scene_rotates_beyond_the_small_angles(large):
+    res = run(large, **ADAPTIVE)
+    assert 0.25 < np.max(np.abs(res.d[:, 2])) < 0.5
+
+
+def test_exact_kinematics_agree_with_an_independent_integration(large):
+    res = run(large, **ADAPTIVE)
+    ref = independent(MOMENT, FORCE, res.time)
+    for i in range(3):
+        err = np.max(np.abs(res.d[:, i] - ref[:, i])) / np.max(np.abs(ref[:, i]))
+        assert err < 1e-6, (i, err)
+    # velocities as well; and the point's motion follows R(theta) exactly
+    for i in range(3):
+        err = np.max(np.abs(res.v[:, i] - ref[:, 3 + i])) / np.max(np.abs(ref[:, 3 + i]))
+        assert err < 1e-6, (i, err)
+    th = ref[:, 2]
+    corner = np.column_stack([ref[:, 0] + C * np.cos(th) - C * np.sin(th) - C,
+                              ref[:, 1] + C * np.sin(th) + C * np.cos(th) - C])
+    got = np.column_stack([res.column("corner_u1_m"), res.column("corner_u2_m")])
+    assert np.max(np.abs(got - corner)) < 1e-6 * np.max(np.abs(corner))
+
+
+@pytest.mark.parametrize("integrator", FIXED_STEP)
+def test_every_fixed_step_method_converges_to_the_exact_solution_at_its_order(large, integrator):
+    errs = []
+    dts = (2e-3, 1e-3, 5e-4)
+    for dt in dts:
+        res = run(large, integrator=integrator, dt=dt)
+        ref = independent(MOMENT, FORCE, res.time)
+        errs.append(np.max(np.abs(res.d[:, 2] - ref[:, 2])) / np.max(np.abs(ref[:, 2])))
+    assert errs[-1] < 2e-3
+    order = math.log(errs[0] / errs[-1]) / math.log(dts[0] / dts[-1])
+    assert order == pytest.approx(2.0, abs=0.25), errs
+    # the energy balance closes to the method's accuracy with the rows turning
+    assert res.energy_balance < 1e-3
+
+
+def test_total_accelerations_of_a_point_carry_the_centripetal_term(large):
+    res = run(large, **ADAPTIVE)
+    th, w, al = res.d[:, 2], res.v[:, 2], res.column("alphat3_rad_s2")
+    r1, r2 = C * np.cos(th) - C * np.sin(th), C * np.sin(th) + C * np.cos(th)
+    want1 = res.column("at1_m_s2") - al * r2 - w * w * r1
+    want2 = res.column("at2_m_s2") + al * r1 - w * w * r2
+    assert np.max(np.abs(res.column("corner_at1_m_s2") - want1)) < 1e-9 * np.max(np.abs(want1))
+    assert np.max(np.abs(res.column("corner_at2_m_s2") - want2)) < 1e-9 * np.max(np.abs(want2))
+    # the moment resultant is the springs' exact moment about G at each row
+    ref = independent(MOMENT, FORCE, res.time)
+    assert np.max(np.abs(res.d[:, 2] - ref[:, 2])) < 1e-6
+
+
+def test_small_and_exact_agree_to_second_order_in_the_rotation(tmp_path):
+    """Halving the motion quarters the difference of the two models (m, the rotation at the
+    body's half side)."""
+    diffs = []
+    for amp in (24.0, 12.0):
+        runs = {kin: run(scene(deck(kin, moment=amp, force=amp / 1.6), tmp_path), **ADAPTIVE)
+                for kin in ("small", "exact")}
+        theta = np.max(np.abs(runs["exact"].d[:, 2]))
+        scale = np.array([1.0, 1.0, C])
+        diffs.append((theta, np.max(np.abs((runs["small"].d - runs["exact"].d) * scale))))
+    (t1, d1), (t2, d2) = diffs
+    assert t1 == pytest.approx(2 * t2, rel=1e-3)
+    assert d1 < 10 * C * t1 * t1  # (a phase the two models drift apart by over the run)
+    assert d1 / d2 == pytest.approx(4.0, rel=0.05)
+
+
+def test_small_kinematics_keep_the_seed_rows(tmp_path):
+    small, _ = scene(deck("small", moment=1.0), tmp_path)
+    exact, _ = scene(deck("exact", moment=1.0), tmp_path)
+    assert small.kinematics == "small" and small.axial is None and small.rotation_index == -1
+    assert exact.rotation_index == 2
+    np.testing.assert_array_equal(small.bvec, exact.bvec)
+    np.testing.assert_allclose(exact.axial, [C, -C, -C, C, C / math.sqrt(2)], atol=1e-15)
+
+
+def test_a_small_rotation_run_reports_the_error_its_kinematics_carry(tmp_path):
+    """The large scene run with the seed's kinematics: summary's ``kinematics`` holds the
+    difference from the exact run, per column, and a warning names it in numbers."""
+    from rbhyst.results.analysis import analyse
+
+    system, settings = scene(deck("small", moment=MOMENT, force=FORCE), tmp_path)
+    res = analyse(system, dataclasses.replace(settings, integrator="chang", dt=5e-4), keep=True)
+    kin = res.kinematics
+    assert kin["model"] == "small" and kin["max_rotation_rad"] > 0.25
+    # against an exact run of its own: the same numbers
+    exact_sys, _ = scene(deck("exact", moment=MOMENT, force=FORCE), tmp_path)
+    exact = simulate(exact_sys, dataclasses.replace(settings, integrator="chang", dt=5e-4))
+    want = np.max(np.abs(res.column("theta3_rad") - exact.column("theta3_rad"))) / np.max(np.abs(exact.column("theta3_rad")))
+    assert kin["difference"]["theta3"] == pytest.approx(want, rel=1e-6)
+    assert kin["worst"]["difference"] > 0.05
+    said = [w for w in res.warnings if "small rotations" in w]
+    assert len(said) == 1 and 'analysis.kinematics = "exact"' in said[0] and kin["worst"]["column"] in said[0]
+    assert "kinematics" in res.summary()
+
+
+def test_a_barely_turning_run_pays_nothing_and_says_why(tmp_path):
+    from rbhyst.results.analysis import analyse
+
+    system, settings = scene(deck("small", moment=2.0), tmp_path)
+    res = analyse(system, settings, keep=True)
+    kin = res.kinematics
+    assert kin["difference"] is None and kin["neglected"]["share"] < 1e-3
+    assert kin["max_rotation_rad"] < 1e-3 and "not computed" in kin["method"]
+    assert not [w for w in res.warnings if "rotation" in w]
+
+
+def test_exact_kinematics_refuse_what_they_do_not_cover(tmp_path):
+    from rbhyst.errors import InputError
+
+    data = deck("exact", moment=1.0)
+    data["dampers"] = [{"point": [C, C], "angle_deg": 0.0, "c": 100.0}]
+    data["excitation"]["force"].update(p1={"type": "half-sine", "units": "N", "duration": 0.1, "amplitude": 1.0},
+                                       point=[C, 0.0])
+    with pytest.raises(InputError) as err:
+        scene(data, tmp_path)
+    assert [p.split(":")[0] for p in err.value.problems] == ["dampers", "excitation.force.point"]
+
+
+def test_the_neglected_terms_flag_a_scene_before_the_rotation_does(tmp_path):
+    """Mounts level with G under a lateral force: the shear forces' moment arm turns with the
+    body (f c sin theta), a large share of the small rocking moment; the indicator sees it, the
+    exact twin runs and measures what the seed's rows miss, above theta / 2."""
+    from rbhyst.results.analysis import analyse
+
+    data = deck("small", moment=0.0, force=2.0e3)
+    data["excitation"]["force"].pop("m3")
+    res = analyse(*scene(data, tmp_path), keep=True)
+    kin = res.kinematics
+    assert kin["difference"] is not None
+    assert kin["worst"]["difference"] > 3 * kin["max_rotation_rad"] / 2  # (6.3 times here)
+    assert kin["neglected"]["share"] > 0.1 * res.settings.warn_error
+
+
+def test_the_modes_at_rest_feel_the_weight_with_exact_kinematics(tmp_path):
+    """A square on four vertical springs at its base corners and two horizontal ones at G's
+    level, under gravity: with exact rows, the rocking stiffness at rest is k_v sum x^2 less the
+    weight's W h (P-Delta, h = the half side from the springs up to G), which the seed's rows lack."""
+    from rbhyst.solve.modes import tangent_at_rest
+
+    kv, kh = 2.0e5, 1.0e5
+    data = {
+        "body": {"vertices": [[-C, -C], [C, -C], [C, C], [-C, C]], "mass": MASS, "gravity": [0.0, -9.81]},
+        "hysteresis": {"v": linear_set(kv), "h": linear_set(kh)},
+        "elements": [{"point": [C, -C], "angle_deg": 90.0, "hysteresis": "v"},
+                     {"point": [-C, -C], "angle_deg": 90.0, "hysteresis": "v"},
+                     {"point": [C, 0.0], "angle_deg": 0.0, "hysteresis": "h"},
+                     {"point": [-C, 0.0], "angle_deg": 0.0, "hysteresis": "h"}],
+        "analysis": {"dt": 1e-3, "duration": 0.1},
+    }
+    weight = MASS * 9.81
+    for kin, want in (("small", 2 * kv * C * C), ("exact", 2 * kv * C * C - weight * C)):
+        data["analysis"]["kinematics"] = kin
+        system, _ = scene(data, tmp_path)
+        k = tangent_at_rest(system)
+        assert k[2, 2] == pytest.approx(want, rel=1e-9), kin
