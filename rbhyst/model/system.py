@@ -107,7 +107,8 @@ class Excitation:
             last = n_steps if s.end is None else min(n_steps, math.ceil(s.end / dt) + 1)
             if first < last:
                 spans.append((first, last, need))
-        bounds = np.unique([0, n_steps, *(f for f, _, _ in spans), *(l for _, l, _ in spans)])
+        # (sorted(set()) rather than np.unique, which imports numpy.ma: a command's every millisecond)
+        bounds = np.array(sorted({0, n_steps, *(f for f, _, _ in spans), *(l for _, l, _ in spans)}), dtype=np.int64)
         nsub = np.ones(len(bounds) - 1, dtype=np.int64)
         for first, last, need in spans:
             inside = (bounds[:-1] >= first) & (bounds[1:] <= last)

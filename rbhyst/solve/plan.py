@@ -238,7 +238,7 @@ class _FixedStepPlan(Plan):
         self.bounds, self.substeps = system.excitation.substeps(s.dt, self.n_steps)
         k0 = system.K0
         self.coef, self.level0 = {}, {}
-        for nsub in np.unique(self.substeps):
+        for nsub in np.array(sorted(set(self.substeps.tolist())), dtype=np.int64):  # (np.unique imports numpy.ma)
             h_c = s.dt / nsub
             level0 = min_level(system, s, method, h_c)
             # levels below level0 are never used (and may be singular for an extreme K0)
