@@ -1,7 +1,5 @@
 """The command line: load -> assemble -> simulate -> write. Nothing below knows about the terminal."""
 
-from __future__ import annotations
-
 import os
 import signal
 import sys

@@ -53,3 +53,27 @@ def test_a_stale_build_is_never_used(tmp_path, monkeypatch):
         assert compiled.kernel("run_chunk").__module__ == "rbhyst.solve.kernels.loop"
     finally:
         compiled._aot.cache_clear()
+
+
+def test_a_changed_kernel_source_clears_the_cached_kernels(tmp_path):
+    """numba keys a cached kernel on its own file: an edited step (inlined into the loop from
+    another file) would run stale. The cache of every kernel source goes when any changed."""
+    from rbhyst.solve.kernels.compiled import clear_stale
+
+    sources = ("solve/kernels/loop.py", "solve/integrators/steps.py")
+    for rel in sources:
+        cache = tmp_path / rel.rsplit("/", 1)[0] / "__pycache__"
+        cache.mkdir(parents=True, exist_ok=True)
+        stem = rel.rsplit("/", 1)[1][:-3]
+        (cache / f"{stem}.f-12.py311.nbi").write_text("index")
+        (cache / f"{stem}.f-12.py311.1.nbc").write_text("code")
+        (cache / f"{stem}.cpython-311.pyc").write_text("bytecode")
+    assert clear_stale(tmp_path, sources, "1")
+    left = sorted(p.name for p in tmp_path.rglob("__pycache__/*"))
+    assert left == ["kernel-sources.stamp", "loop.cpython-311.pyc", "steps.cpython-311.pyc"]
+    # the same sources again: nothing cleared; a new one cached since stays
+    (tmp_path / "solve/kernels/__pycache__/loop.f-12.py311.nbi").write_text("index")
+    assert not clear_stale(tmp_path, sources, "1")
+    assert (tmp_path / "solve/kernels/__pycache__/loop.f-12.py311.nbi").exists()
+    assert clear_stale(tmp_path, sources, "2")
+    assert not (tmp_path / "solve/kernels/__pycache__/loop.f-12.py311.nbi").exists()

@@ -119,6 +119,31 @@ def test_no_plots_never_imports_matplotlib(tmp_path):
     subprocess.run([sys.executable, "-c", code], check=True, capture_output=True)
 
 
+def test_importing_the_command_line_loads_no_heavy_library():
+    """`rbhyst --help` and every command start from `import rbhyst.cli`: the libraries of the
+    analysis, the plots, the sweeps and the deck's YAML come with the command that needs them."""
+    heavy = ("numpy", "pydantic", "matplotlib", "scipy", "numba", "dask", "distributed", "pandas", "pyarrow",
+             "rich", "yaml")
+    code = f"import sys, rbhyst.cli; print([m for m in {heavy!r} if m in sys.modules])"
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert done.stdout.strip() == "[]", done.stdout + done.stderr
+
+
+def test_a_toml_run_with_plots_loads_no_yaml_and_no_spectra_kernels(tmp_path):
+    """A run without [output.spectra] draws its figures without the spectra's numba kernels,
+    and a TOML deck is read without yaml (each costs a command a tenth of a second or more)."""
+    deck = write_deck(tmp_path, seed_deck(duration=0.2))
+    code = (
+        "import sys\nfrom rbhyst.cli import app\n"
+        f"try:\n    app(['run', {str(deck)!r}, '--out', {str(tmp_path / 'o')!r}])\n"
+        "except SystemExit as e:\n    assert e.code in (0, None), e.code\n"
+        "print(sorted(m for m in ('yaml', 'rbhyst.solve.spectra') if m in sys.modules))\n"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert done.stdout.split("\n")[-2] == "[]", done.stdout + done.stderr
+    assert (tmp_path / "o" / "model.png").exists()
+
+
 def test_default_output_folder_is_beside_the_deck(tmp_path):
     deck = write_deck(tmp_path, seed_deck(duration=0.1), name="scene")
     code, _, err = run("run", deck, "--no-plots")

@@ -19,3 +19,13 @@ def test_every_value_is_printf_s_10_significant_digits():
     expected = "".join(",".join("%.10g" % x for x in row) + "\n" for row in table)
     assert format_rows(table).decode() == expected
     assert format_rows(np.asfortranarray(table)).decode() == expected  # a column-major chunk too
+
+
+def test_every_length_of_digits_at_every_place_of_the_point():
+    """The renderer writes all ten digits and then cuts after the last significant one: each
+    count of significant digits, 1 to 10, at each exponent of the plain and the e-notation forms."""
+    digits = [int("1234567891"[:n]) for n in range(1, 11)] + [int("9" * n) for n in range(1, 11)]
+    vals = [sign * d * 10.0 ** (e - len(str(d)) + 1) for d in digits for e in range(-7, 13) for sign in (1, -1)]
+    table = np.array(vals).reshape(-1, 10)
+    expected = "".join(",".join("%.10g" % x for x in row) + "\n" for row in table)
+    assert format_rows(table).decode() == expected

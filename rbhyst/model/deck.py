@@ -6,15 +6,14 @@ deck location (list indices count from 1, as vertices and elements do in the
 seed and in the CSV columns).
 """
 
-from __future__ import annotations
 
+import functools
 import re
 import tomllib
 from pathlib import Path
 from typing import Annotated, Any, Generic, Literal, TypeVar, Union
 
 import numpy as np
-import yaml
 from pydantic import (BaseModel, ConfigDict, Discriminator, Field, PrivateAttr, Tag, ValidationError, field_validator,
                       model_validator)
 from pydantic_core import PydanticCustomError
@@ -727,22 +726,28 @@ def check_runnable(deck: Deck) -> None:
 # ---------------------------------------------------------------- loading
 
 
-class _YamlLoader(yaml.SafeLoader):
-    """Safe loading (no object tags) with YAML 1.2 floats, so ``1e-3`` is a number as in TOML."""
+@functools.cache
+def _yaml_loader():
+    """Safe loading (no object tags) with YAML 1.2 floats, so ``1e-3`` is a number as in TOML.
+    Built on the first YAML deck: a TOML deck never imports yaml."""
+    import yaml
 
+    class _YamlLoader(yaml.SafeLoader):
+        pass
 
-_YamlLoader.add_implicit_resolver(
-    "tag:yaml.org,2002:float",
-    re.compile(
-        r"""^(?:[-+]?(?:[0-9][0-9_]*)\.[0-9_]*(?:[eE][-+]?[0-9]+)?
-        |[-+]?(?:[0-9][0-9_]*)(?:[eE][-+]?[0-9]+)
-        |\.[0-9_]+(?:[eE][-+]?[0-9]+)?
-        |[-+]?\.(?:inf|Inf|INF)
-        |\.(?:nan|NaN|NAN))$""",
-        re.X,
-    ),
-    list("-+0123456789."),
-)
+    _YamlLoader.add_implicit_resolver(
+        "tag:yaml.org,2002:float",
+        re.compile(
+            r"""^(?:[-+]?(?:[0-9][0-9_]*)\.[0-9_]*(?:[eE][-+]?[0-9]+)?
+            |[-+]?(?:[0-9][0-9_]*)(?:[eE][-+]?[0-9]+)
+            |\.[0-9_]+(?:[eE][-+]?[0-9]+)?
+            |[-+]?\.(?:inf|Inf|INF)
+            |\.(?:nan|NaN|NAN))$""",
+            re.X,
+        ),
+        list("-+0123456789."),
+    )
+    return _YamlLoader
 
 
 def _format_loc(loc: tuple) -> str:
@@ -813,8 +818,10 @@ def read_mapping(path: Path) -> dict:
         except tomllib.TOMLDecodeError as exc:
             raise InputError(f"{path}: TOML syntax error: {exc}") from None
     if suffix in (".yaml", ".yml"):
+        import yaml
+
         try:
-            data = yaml.load(text, Loader=_YamlLoader)
+            data = yaml.load(text, Loader=_yaml_loader())
         except yaml.MarkedYAMLError as exc:
             mark = exc.problem_mark
             where = f" (at line {mark.line + 1}, column {mark.column + 1})" if mark else ""

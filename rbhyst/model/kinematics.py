@@ -64,6 +64,17 @@ def point_motion_exact(d: np.ndarray, v: np.ndarray, at: np.ndarray, x, theta: n
     return out
 
 
+def turned_loads(p: np.ndarray, theta, n: int, rot: int) -> np.ndarray:
+    """(k, n) generalized loads from the load columns p (k, width) at the rotations theta (k,):
+    where the forces' arm turns (width n + 2: r x p and r . p follow), the moment is
+    cos(theta) (r x p) - sin(theta) (r . p) (rbhyst.model.system.Excitation.follow)."""
+    out = np.array(p[:, :n], dtype=float, copy=True)
+    if p.shape[1] > n and rot >= 0:
+        half = np.sin(0.5 * np.asarray(theta, dtype=float))
+        out[:, rot] += -2.0 * half * half * p[:, n] - np.sin(theta) * p[:, n + 1]
+    return out
+
+
 def exact_twin(system):
     """The same scene with exact kinematics: each kernel row split where its elements' points lie
     differently along their line of action (they deform alike only to first order), before
@@ -72,7 +83,7 @@ def exact_twin(system):
     from dataclasses import replace
 
     from rbhyst.model.coordinates import PLANE
-    from rbhyst.model.system import axial_offset, exact_limits
+    from rbhyst.model.system import arm_turns, axial_offset, exact_limits
 
     if system.coordinates != PLANE or exact_limits(system):
         return None
@@ -90,7 +101,7 @@ def exact_twin(system):
     for el in elements:
         mult[el.row] += el.count
     old = [r for r, _ in rows]
-    excitation = system.excitation
+    excitation = replace(system.excitation, follow=arm_turns(system.excitation))
     if system.static is not None:  # the weight enters again with the exact equilibrium
         excitation = replace(excitation, constant=(0.0,) * system.n)
     return replace(system, bvec=system.bvec[old], mult=mult, params=system.params[old], k0=system.k0[old],

@@ -222,22 +222,31 @@ def _rows_of(lines: list[str]):
 _SEPARATORS = re.compile(r"[,;\s]+")
 
 
+def _tokens(text: str) -> list[str]:
+    """The numbers of a line or lines as text: what splitting at every run of _SEPARATORS gives,
+    by plain string methods (a regular expression per line cost a record of 4,000 lines ~10 ms)."""
+    return text.replace(",", " ").replace(";", " ").split()
+
+
 def _fast_table(lines: list[str]):
     """(data, header line, header) of a well-formed table in one numpy conversion, or (None, ...)."""
     body, first, header = [], None, ""
-    for j, text in _rows_of(lines):
-        if not body and first is None and not is_number(_SEPARATORS.split(text, 1)[0]):
+    rows = _rows_of(lines)
+    for j, text in rows:
+        if first is None and not is_number(_SEPARATORS.split(text, 1)[0]):
             first, header = j, text
             continue
-        body.append(_SEPARATORS.sub(" ", text))
+        body.append(text)
+        break
+    body.extend(text for _, text in rows)
     if len(body) < 2:
         return None, first, header
-    ncol = len(body[0].split())
+    ncol = len(_tokens(body[0]))
     try:
-        data = np.array(" ".join(body).split(), dtype=float)
+        data = np.array(_tokens(" ".join(body)), dtype=float)
     except ValueError:
         return None, first, header
-    if ncol == 0 or data.size != ncol * len(body) or any(len(b.split()) != ncol for b in body[:: max(1, len(body) // 64)]) \
+    if ncol == 0 or data.size != ncol * len(body) or any(len(_tokens(b)) != ncol for b in body[:: max(1, len(body) // 64)]) \
             or not np.all(np.isfinite(data)):
         return None, first, header
     data = data.reshape(len(body), ncol)

@@ -9,6 +9,7 @@ stops or has a corner: the adaptive integrator puts a step boundary there).
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -159,11 +160,13 @@ def sine(amplitude: float, frequency_hz: float, phase_deg: float = 0.0, start: f
                 ramp_cycles / frequency_hz)
 
 
-#: Gauss-Legendre points and weights on [0, 1] for each half of a hat (exact for polynomials of
-#: degree 15 times the hat's linear weight: far below the step's own error for smooth pieces)
-_GX, _GW = np.polynomial.legendre.leggauss(8)
-_GX = 0.5 * (_GX + 1.0)
-_GW = 0.5 * _GW
+@functools.cache
+def _gauss() -> tuple[np.ndarray, np.ndarray]:
+    """Gauss-Legendre points and weights on [0, 1] for each half of a hat (exact for polynomials
+    of degree 15 times the hat's linear weight: far below the step's own error for smooth
+    pieces). On first use: numpy.polynomial costs a command milliseconds to import."""
+    x, w = np.polynomial.legendre.leggauss(8)
+    return 0.5 * (x + 1.0), 0.5 * w
 
 
 def hat_average(signal, t: np.ndarray, h: float) -> np.ndarray:
@@ -173,6 +176,7 @@ def hat_average(signal, t: np.ndarray, h: float) -> np.ndarray:
     starts, stops or has a corner), so a jump or a kink costs nothing.
     """
     t = np.asarray(t, dtype=float)
+    gx, gw = _gauss()
     out = np.zeros(len(t))
     for side in (-1.0, 1.0):
         # the half [t_k, t_k + side h]: u in [0, 1] along it, weight (1 - u)
@@ -188,8 +192,8 @@ def hat_average(signal, t: np.ndarray, h: float) -> np.ndarray:
             live = span > 0.0
             if not live.any():
                 continue
-            u = lo[live, None] + span[live, None] * _GX[None, :]
+            u = lo[live, None] + span[live, None] * gx[None, :]
             vals = signal(t[live, None] + side * h * u)
-            a[live] += span[live] * ((vals * (1.0 - u)) @ _GW)
+            a[live] += span[live] * ((vals * (1.0 - u)) @ gw)
         out += a
     return out

@@ -7,7 +7,7 @@ callables of time.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Callable
 
@@ -44,6 +44,10 @@ class Excitation:
     #: support acceleration along its influence vector r (as -M r), a force or moment along its
     #: generalized force (eq. 13); None: those of the seed's plane body with the forces at ``point``
     directions: dict[str, tuple[float, ...]] | None = None
+    #: exact kinematics with p1, p2 away from G: their moment arm turns with the body, so the
+    #: load carries two more columns, r x p and r . p, from which the kernels take the moment
+    #: cos(theta) (r x p) - sin(theta) (r . p) at each state (rbhyst.model.kinematics.turned_loads)
+    follow: bool = False
 
     def __post_init__(self):
         if self.directions is None:
@@ -56,6 +60,14 @@ class Excitation:
     def n(self) -> int:
         """The number of generalized loads: the body's coordinates."""
         return len(self.constant)
+
+    @property
+    def width(self) -> int:
+        """Columns of the load arrays: n, and r x p, r . p where the forces' arm turns (follow)."""
+        return self.n + 2 if self.follow else self.n
+
+    def _constant_row(self) -> np.ndarray:
+        return np.concatenate([self.constant, np.zeros(self.width - self.n)])
 
     @property
     def has_support(self) -> bool:
@@ -89,7 +101,8 @@ class Excitation:
             last = n_steps if s.end is None else min(n_steps, math.ceil(s.end / dt) + 1)
             if first < last:
                 spans.append((first, last, need))
-        bounds = np.unique([0, n_steps, *(f for f, _, _ in spans), *(l for _, l, _ in spans)])
+        # (sorted(set()) rather than np.unique, which imports numpy.ma: a command's every millisecond)
+        bounds = np.array(sorted({0, n_steps, *(f for f, _, _ in spans), *(l for _, l, _ in spans)}), dtype=np.int64)
         nsub = np.ones(len(bounds) - 1, dtype=np.int64)
         for first, last, need in spans:
             inside = (bounds[:-1] >= first) & (bounds[1:] <= last)
@@ -146,6 +159,8 @@ class Excitation:
         a unit force or moment ((1, 0, -x2P), (0, 1, x1P), (0, 0, 1) for p1, p2, m3: eq. 13).
         Without ``mass``, the forces only."""
         out = {}
+        x1, x2 = self.point
+        arm = {"p1": (-x2, x1), "p2": (x1, x2)}  # (r x e_k, r . e_k) of a unit force at the point
         for k, r in self.directions.items():
             if k.startswith("ag"):
                 if mass is not None:
@@ -153,6 +168,8 @@ class Excitation:
                     out[k] = np.array([-m * x if x != 0.0 else 0.0 for m, x in zip(mass, r)])
             else:
                 out[k] = np.array(r, dtype=float)
+            if self.follow and k in out:
+                out[k] = np.concatenate([out[k], arm.get(k, (0.0, 0.0))])
         return out
 
     def analytic_table(self, mass: np.ndarray) -> np.ndarray:
@@ -160,7 +177,7 @@ class Excitation:
         its n weights into the load, for compiled code that evaluates them exactly."""
         w = self.weights(mass)
         rows = [s.row() + list(w[k]) for k, s in self.signals.items() if not isinstance(s, Series)]
-        return np.array(rows, dtype=float).reshape(-1, signals.ROW_SIZE + self.n)
+        return np.array(rows, dtype=float).reshape(-1, signals.ROW_SIZE + self.width)
 
     def record_pieces(self, brk: np.ndarray, mass: np.ndarray) -> np.ndarray:
         """(pieces, 2, n) the constant load and the records' share of it at both ends of every
@@ -169,8 +186,8 @@ class Excitation:
         records are linear between their samples: with the samples among the breakpoints,
         linear pieces are exact."""
         ta, tb = brk[:-1], brk[1:]
-        out = np.empty((len(ta), 2, self.n))
-        out[:] = self.constant
+        out = np.empty((len(ta), 2, self.width))
+        out[:] = self._constant_row()
         w = self.weights(mass)
         for k, s in self.signals.items():
             if isinstance(s, Series):
@@ -179,11 +196,11 @@ class Excitation:
         return out
 
     def _combine(self, values: dict[str, np.ndarray], n: int, mass: np.ndarray | None) -> np.ndarray:
-        p = np.empty((n, self.n))
-        p[:] = self.constant
+        p = np.empty((n, self.width))
+        p[:] = self._constant_row()
         w = self.weights(mass)
         for k, v in values.items():
-            for c in range(self.n):
+            for c in range(self.width):
                 if w[k][c] != 0.0:
                     p[:, c] += w[k][c] * v
         return p
@@ -572,12 +589,12 @@ def exact_limits(system) -> list[str]:
     if system.dampers:
         problems.append('dampers: viscous dampers with analysis.kinematics = "exact" are not built in (their '
                         'deformation rate turns with the body): use damping.rayleigh, or kinematics = "small"')
-    ex = system.excitation
-    if any(abs(x) > 0.0 for x in ex.point) and (ex.p1 is not None or ex.p2 is not None):
-        problems.append('excitation.force.point: a force away from G with analysis.kinematics = "exact" is not '
-                        'built in (its moment arm turns with the body): give p1, p2 at G and the moment as m3, '
-                        'or kinematics = "small"')
     return problems
+
+
+def arm_turns(excitation: Excitation) -> bool:
+    """Whether p1 or p2 act away from G: with exact kinematics their moment arm turns with the body."""
+    return any(abs(x) > 0.0 for x in excitation.point) and (excitation.p1 is not None or excitation.p2 is not None)
 
 
 def _kernel_rows(deck: dk.Deck, body: Body, exact: bool):
@@ -683,4 +700,6 @@ def assemble(deck: dk.Deck, base: Path, run: bool = True) -> System:
     )
     if exact and exact_limits(system):
         raise InputError(exact_limits(system))
+    if exact and arm_turns(excitation):
+        system = replace(system, excitation=replace(excitation, follow=True))
     return system

@@ -27,6 +27,11 @@ STYLE = {
     "axes.formatter.use_mathtext": True,
 }
 
+#: a panel whose values all stay below this fraction of the largest of its figure is drawn as
+#: "at rest" (or, for spectra, named instead of drawn): it is rounding (a symmetric body's cross
+#: response, 1e-15 m/s2 under a pulse of 100 m/s2)
+NEGLIGIBLE = 1e-9
+
 #: margins of a figure of stacked time series, in inches: left, right, bottom, top, and the gap
 #: between axes (room for a power of ten above each)
 TIME_MARGINS = (0.8, 0.2, 0.45, 0.35, 0.3)

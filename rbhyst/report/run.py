@@ -10,8 +10,7 @@ from matplotlib.ticker import MaxNLocator
 
 from rbhyst.solve.result import Result
 from rbhyst.report._labels import Labels
-from rbhyst.report.spectra import NEGLIGIBLE
-from rbhyst.report._style import TIME_MARGINS, plain_number, save, styled, subplots
+from rbhyst.report._style import NEGLIGIBLE, TIME_MARGINS, plain_number, save, styled, subplots
 
 
 def _draw_outline(ax, v: np.ndarray, fill_alpha: float, labels: list[str], placer: Labels) -> None:

@@ -8,14 +8,11 @@ from pathlib import Path
 import numpy as np
 
 from rbhyst.solve.located import CENTRE, GROUND, LocatedSpectra
-from rbhyst.report._style import plain_log_ticks, plain_number, save, styled, subplots
+from rbhyst.report._style import NEGLIGIBLE, plain_log_ticks, plain_number, save, styled, subplots
 
 G_STANDARD = 9.80665
 #: one line style per damping ratio, in the deck's order
 DAMPING_STYLES = ("-", "--", ":", "-.", (0, (5, 1, 1, 1)), (0, (1, 3)))
-#: a direction whose spectra all stay below this fraction of the largest gets no panel: it is
-#: rounding (a symmetric body's cross response, 1e-15 m/s2 under a pulse of 100 m/s2)
-NEGLIGIBLE = 1e-9
 
 
 def shown_directions(spectra: LocatedSpectra) -> tuple[list[str], dict[str, float]]:

@@ -20,19 +20,38 @@ POW10 = np.array([float(f"1e{k}") for k in range(-300, 301)])
 
 def format_rows(table: np.ndarray) -> bytes:
     """CSV lines of a 2-D float table, each value as "%.10g" would print it."""
-    table = np.ascontiguousarray(table, dtype=float)
-    if table.size == 0:
-        return b"\n" * table.shape[0]
-    mant = np.empty(table.shape, np.int64)
-    expo = np.empty(table.shape, np.int64)
-    flag = np.empty(table.shape, np.int8)
-    if kernel("decompose")(table, mant, expo, flag, POW10):
-        for i, j in zip(*np.nonzero(flag == 1)):
-            # exact decimal digits of a near-tie: "%.9e" rounds to the same 10 digits as "%.10g"
-            digits, exponent = ("%.9e" % abs(table[i, j])).split("e")
-            mant[i, j] = int(digits.replace(".", ""))
-            expo[i, j] = int(exponent)
-            flag[i, j] = 0
-    buf = np.empty(table.shape[0] * (table.shape[1] * (MAX_WIDTH + 1) + 1), np.uint8)
-    n = kernel("render")(table, mant, expo, flag, buf, np.empty(DIGITS, np.int64))
-    return buf[:n].tobytes()
+    return bytes(RowsText()(table))
+
+
+class RowsText:
+    """format_rows for a stream of chunks of one width: the work arrays and the text buffer are
+    kept from one chunk to the next (fresh ones cost a page fault every 4 kB, a tenth of the
+    time of the formatting), and the text comes back as a view of the buffer, not a copy: use
+    it before the next call."""
+
+    def __init__(self):
+        self._work: dict[str, np.ndarray] = {}
+
+    def _array(self, name: str, size: int, dtype) -> np.ndarray:
+        a = self._work.get(name)
+        if a is None or a.size < size:
+            a = self._work[name] = np.empty(size, dtype)
+        return a[:size]
+
+    def __call__(self, table: np.ndarray) -> memoryview:
+        table = np.ascontiguousarray(table, dtype=float)
+        if table.size == 0:
+            return memoryview(b"\n" * table.shape[0])
+        mant = self._array("mant", table.size, np.int64).reshape(table.shape)
+        expo = self._array("expo", table.size, np.int64).reshape(table.shape)
+        flag = self._array("flag", table.size, np.int8).reshape(table.shape)
+        if kernel("decompose")(table, mant, expo, flag, POW10):
+            for i, j in zip(*np.nonzero(flag == 1)):
+                # exact decimal digits of a near-tie: "%.9e" rounds to the same 10 digits as "%.10g"
+                digits, exponent = ("%.9e" % abs(table[i, j])).split("e")
+                mant[i, j] = int(digits.replace(".", ""))
+                expo[i, j] = int(exponent)
+                flag[i, j] = 0
+        buf = self._array("buf", table.shape[0] * (table.shape[1] * (MAX_WIDTH + 1) + 1), np.uint8)
+        n = kernel("render")(table, mant, expo, flag, buf, self._array("digits", DIGITS, np.int64))
+        return memoryview(buf)[:n]

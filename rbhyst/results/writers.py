@@ -19,15 +19,15 @@ class CsvWriter:
     """time_history.csv, written chunk by chunk: 10 significant digits, one header row."""
 
     def __init__(self, path: Path, columns: tuple[str, ...]):
-        from rbhyst.results.csvtext import format_rows
+        from rbhyst.results.csvtext import RowsText
 
-        self._format = format_rows
+        self._format = RowsText()
         self.path = Path(path)
         self._fh = open(self.path, "wb")
         self._fh.write((",".join(columns) + "\n").encode())
 
     def add(self, rows: np.ndarray) -> None:
-        self._fh.write(self._format(rows))  # (made row-major there)
+        self._fh.write(self._format(rows))  # (made row-major there; a view of its buffer, written at once)
 
     def close(self) -> None:
         self._fh.close()

@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from rbhyst.model.coordinates import PLANE, columns, translations
-from rbhyst.model.kinematics import point_motion_exact
+from rbhyst.model.kinematics import point_motion_exact, turned_loads
 from rbhyst.model.points import point_columns, point_motion
 
 
@@ -131,7 +131,10 @@ class Layout:
         # holds the force's value on its span). Not the integrator's own acceleration, which
         # near a jump or a kink carries the load averaged over a step.
         at = out[:, self.slices["at"]]
-        at[:] = self.system.excitation.forces(raw.t) - r
+        forces = self.system.excitation.forces(raw.t)
+        if forces.shape[1] > len(self.coordinates):  # forces whose arm turns (exact kinematics)
+            forces = turned_loads(forces, raw.d[:, self._rot], len(self.coordinates), self._rot)
+        at[:] = forces - r
         if self.damped:
             at -= raw.v @ self._ct
         at *= self._minv

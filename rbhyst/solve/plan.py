@@ -17,6 +17,7 @@ from rbhyst.solve.kernels import layout as kernels
 from rbhyst.errors import AnalysisError, InputError, byte_size
 from rbhyst.solve.history import Extremes, Layout, PlotData, Raw, body_spectrum_columns, estimate_columns
 from rbhyst.solve.kernels.layout import N_STATE, N_W, X_CUR, X_ITER, X_LEVEL_USED, X_OMEGA_DT2, X_STEPS, X_SUBSTEPS, n_x, x_slice
+from rbhyst.model.kinematics import turned_loads
 from rbhyst.model.system import System
 from rbhyst.solve.result import Result, RunStats
 from rbhyst.solve.static import at_rest_under_gravity
@@ -237,7 +238,7 @@ class _FixedStepPlan(Plan):
         self.bounds, self.substeps = system.excitation.substeps(s.dt, self.n_steps)
         k0 = system.K0
         self.coef, self.level0 = {}, {}
-        for nsub in np.unique(self.substeps):
+        for nsub in np.array(sorted(set(self.substeps.tolist())), dtype=np.int64):  # (np.unique imports numpy.ma)
             h_c = s.dt / nsub
             level0 = min_level(system, s, method, h_c)
             # levels below level0 are never used (and may be singular for an extreme K0)
@@ -272,8 +273,11 @@ class _FixedStepPlan(Plan):
         # first moves, so the monitor sees a stiff body at rest before the first step that moves it
         for e in range(ne):
             st[0, e, kernels.K] = max(virgin_tangent(self.params[e], 1.0), virgin_tangent(self.params[e], -1.0))
-        p0 = self.system.excitation.load(np.zeros(1), self.system.mass)[0]
         static = self.system.static
+        q0 = static.q if static is not None else np.zeros(n)
+        rot = self.system.rotation_index
+        p0 = turned_loads(self.system.excitation.load(np.zeros(1), self.system.mass), q0[rot:rot + 1] if rot >= 0
+                          else np.zeros(1), n, rot)[0]
         if static is not None:  # at rest at the static equilibrium under gravity, its branches as the path left them
             st[0] = static.st
             x[x_slice(n, 0)] = static.q

@@ -36,7 +36,10 @@ def static_equilibrium(system) -> Static:
     """Equilibrium under system.weight (see the module docstring); AnalysisError where the elements
     cannot carry it (their tangent stiffness vanishes or Newton does not converge)."""
     from rbhyst.model.hysteresis import virgin_tangent
+    from rbhyst.solve.kernels.compiled import fresh_jit_cache
     from rbhyst.solve.kernels.elements import update_elements
+
+    fresh_jit_cache()
 
     w = np.asarray(system.weight, dtype=float)
     bvec = np.ascontiguousarray(system.bvec)

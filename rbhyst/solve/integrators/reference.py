@@ -42,7 +42,7 @@ from rbhyst.solve.integrators import dop853_tableau as _dop
 from rbhyst.errors import AnalysisError
 from rbhyst.solve.kernels.compiled import kernel
 from rbhyst.solve.kernels.dop853_layout import (NS, R_ELEMENT, R_EVENTS, R_FEV, R_HMAX, R_HMIN, R_INFO, R_REJECTED, R_START_FLIPS, R_STATUS, R_STEPS, R_TIME, ST_NONFINITE, ST_OK, ST_OVERFLOW, ST_STEP_TOO_SMALL, ST_TOO_MANY_STEPS, ny)
-from rbhyst.model.kinematics import rows_at
+from rbhyst.model.kinematics import rows_at, turned_loads
 from rbhyst.model.records import Series
 from rbhyst.model.signals import SINE
 from rbhyst.solve.history import Layout, Raw
@@ -153,7 +153,7 @@ def _scales(system, pieces: Pieces, rtol):
 def _basis(system, pieces: Pieces, spin, rg):
     """The displacement scale and the lowest circular frequency the tolerances are set from."""
     kr = (system.bvec.T * (system.mult * system.k_reversal)) @ system.bvec
-    p = _load_samples(pieces)
+    p = _load_samples(pieces)[:, :system.n]  # the moments as at rest: a scale only
     try:
         static = np.linalg.solve(kr, p.T).T
     except np.linalg.LinAlgError:  # stiffnesses far apart (an absurd f0): singular in floating point
@@ -193,15 +193,16 @@ def _initial_branches(system, pieces: Pieces):
     """Each element starts moving the way the initial acceleration (else the load's slope) pushes it."""
     first = pieces.brk[1] - pieces.brk[0]
     h = 1e-6 * first
-    p0, p1 = pieces.at(np.array([0.0, h]))
-    dp0 = (p1 - p0) / h  # the load's slope at the start, from inside the first piece
     static = getattr(system, "static", None)
+    q0 = static.q if static is not None else np.zeros(system.n)
+    rot = system.rotation_index
+    p0, p1 = turned_loads(pieces.at(np.array([0.0, h])), np.full(2, q0[rot] if rot >= 0 else 0.0), system.n, rot)
+    dp0 = (p1 - p0) / h  # the load's slope at the start, from inside the first piece
     if static is not None:
         p0 = p0 - static.r  # the weight is carried by the elements
     a0 = p0 / system.mass
     j0 = dp0 / system.mass
     # the rows where the body starts (they differ from b only at a turned static equilibrium)
-    q0 = static.q if static is not None else np.zeros(system.n)
     rows = rows_at(system.bvec, system.axial, system.rotation_index, q0)
     s = np.sign(rows @ a0)
     s2 = np.sign(rows @ j0)
@@ -269,7 +270,7 @@ def integrate(system, t_out: np.ndarray, rtol: float = RTOL, pieces=None, max_st
     minv = tuple(1.0 / system.mass)
     args = (minv, np.ascontiguousarray(system.bvec), system.kernel_axial, system.rotation_index, system.mult, np.ascontiguousarray(system.params),
             np.ascontiguousarray(system.C))
-    work = (np.zeros((6, ne)), np.zeros((7, width)), np.zeros((16, width)), np.zeros((7, width)), np.zeros((4, max(n, ne))),
+    work = (np.zeros((6, ne)), np.zeros((7, width)), np.zeros((16, width)), np.zeros((7, width)), np.zeros((4, max(system.excitation.width, ne))),
             np.zeros(NS + 1))
     tail = (rtol, atol, init, y0, 1e-6, int(max_steps), _A, _B, _C, _E3, _E5, _D, out_y, out_eu, out_ef, out_eh, info, *work)
     _integrate = kernel("integrate", n)

@@ -22,8 +22,8 @@ from numba import njit
 
 from rbhyst.solve.kernels.layout import (NEWTON_FAILED, W_A, W_AN, W_D, W_DN, W_PA, W_PB, W_Q, W_R, W_RN, W_V, W_VN, W_X,
                                          W_Y)
-from rbhyst.solve.kernels.elements import (bbt_sums, mat_row, row_dot, solve_in_place, start_rows, substep_load,
-                                           update_elements)
+from rbhyst.solve.kernels.elements import (arm_moment, bbt_sums, mat_row, row_dot, solve_in_place, start_rows,
+                                           substep_load, update_elements)
 from rbhyst.solve.integrators import central_difference, chang, kr_alpha, newmark
 from rbhyst.solve.integrators.chang import B1, B2, MC_INV
 from rbhyst.solve.integrators.kr_alpha import A_A, A_V, D_A, V_A, V_ANEW, X_NEW, X_OLD
@@ -51,6 +51,9 @@ def chang_step(coef, lv, minv, cm, damped, bvec, axial, rot, mult, params, st, c
     hh = h * h
     for i in range(n):
         dn[i] = d[i] + h * mat_row(coef, lv, B1, i, v, n) + hh * mat_row(coef, lv, B2, i, a, n)
+    if rot >= 0 and load.shape[1] > n:  # forces whose arm turns with the body
+        w[W_PA, rot] += arm_moment(load, j, w0, n, d[rot])[0]
+        pb[rot] += arm_moment(load, j, w1, n, dn[rot])[0]
     ok, bad, work, kgeo = update_elements(bvec, axial, rot, mult, params, dn, st, cur, kpeak, r, bq, n)
     if not ok:
         return False, bad, 0.0
@@ -94,6 +97,9 @@ def kr_alpha_step(coef, lv, minv, cm, damped, bvec, axial, rot, mult, params, st
     hh = h * h
     for i in range(n):
         dn[i] = d[i] + h * v[i] + hh * mat_row(coef, lv, D_A, i, a, n)
+    if rot >= 0 and load.shape[1] > n:  # forces whose arm turns with the body
+        pa[rot] += arm_moment(load, j, w0, n, d[rot])[0]
+        pb[rot] += arm_moment(load, j, w1, n, dn[rot])[0]
     ok, bad, work, kgeo = update_elements(bvec, axial, rot, mult, params, dn, st, cur, kpeak, r, bq, n)
     if not ok:
         return False, bad, 0.0
@@ -134,10 +140,19 @@ def newmark_step(mass, cm, damped, bvec, axial, rot, mult, params, st, cur, w, w
     cv = 2.0 / h
     for i in range(n):
         dn[i] = d[i] + h * v[i] + 0.5 * h * h * a[i]
+    follow = rot >= 0 and load.shape[1] > n  # forces whose arm turns with the body
+    pb_rot = 0.0
+    if follow:
+        w[W_PA, rot] += arm_moment(load, j, w0, n, d[rot])[0]
+        pb_rot = pb[rot]
     for it in range(max_iter):
         ok, bad, work, kgeo = update_elements(bvec, axial, rot, mult, params, dn, st, cur, kpeak, r, bq, n)
         if not ok:
             return False, bad, 0.0, it + 1
+        if follow:
+            extra, slope = arm_moment(load, j, w1, n, dn[rot])
+            pb[rot] = pb_rot + extra
+            kgeo -= slope  # the load's share of the Jacobian: d(R - p)/dtheta
         if rot >= 0:
             bbt_sums(bq, mult, kpeak, 1, mass, False, wm, w[W_Q])
             wm[rot, rot] += kgeo  # the rows turn with the body: the forces' geometric stiffness

@@ -31,6 +31,41 @@ def ahead_of_time() -> bool:
     return _aot() is not None
 
 
+@functools.cache
+def fresh_jit_cache() -> None:
+    """Clear numba's cache of the kernels' files when any kernel source changed since it was
+    written (clear_stale on the package). numba keys a cached function on its own file only: a
+    loop whose steps (another file, inlined) changed would otherwise run the old steps,
+    silently, in a working copy or an editable install after an update. Once per process."""
+    from rbhyst.solve.kernels.aot import PACKAGE, SOURCES, source_stamp
+
+    clear_stale(PACKAGE, SOURCES, str(source_stamp()))
+
+
+def clear_stale(package, sources, stamp: str) -> bool:
+    """Delete numba's cache files (``__pycache__/<stem>.*.nbi|nbc``) of every source file under
+    ``package`` unless the stamp written beside them the last time equals ``stamp``; then write
+    it. Returns whether it cleared. A folder it may not write is left as it is (an installed
+    package's kernels are built ahead of time, and stamped, anyway)."""
+    from pathlib import Path
+
+    mark = Path(package) / "solve" / "kernels" / "__pycache__" / "kernel-sources.stamp"
+    try:
+        if mark.read_text() == stamp:
+            return False
+    except OSError:
+        pass
+    try:
+        for rel in sources:
+            for old in ((Path(package) / rel).parent / "__pycache__").glob(Path(rel).stem + ".*.nb[ic]"):
+                old.unlink(missing_ok=True)
+        mark.parent.mkdir(parents=True, exist_ok=True)
+        mark.write_text(stamp)
+    except OSError:  # pragma: no cover - a read-only install
+        return False
+    return True
+
+
 def kernel(name: str, n: int | None = None):
     """The callable for one of rbhyst.solve.kernels.aot.EXPORTS, for a body of n coordinates
     where the kernel is compiled for each n (built ahead of time for aot.SIZES, else the JIT's)."""
@@ -42,6 +77,7 @@ def kernel(name: str, n: int | None = None):
         if built is not None:
             return getattr(module, built)
 
+    fresh_jit_cache()
     mod, func, _ = EXPORTS[name]
     return getattr(importlib.import_module(mod), func)
 
@@ -53,6 +89,7 @@ def cached(dispatchers) -> bool:
     first run: the command line says so once. Any doubt (numba's cache layout is its own)
     counts as cached, so that nothing false is said.
     """
+    fresh_jit_cache()
     try:
         return all(bool(d._cache._cache_file._load_index()) for d in dispatchers)
     except Exception:  # pragma: no cover - a numba without this layout

@@ -78,6 +78,14 @@ def _load(t, k, brk, pcoef, sig, out, n):
 
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _turn_arm(load, y, rot, n):
+    """Forces away from G with exact kinematics (load columns n, n + 1: r x p and r . p): the
+    moment their turned arm adds at the state y, (cos(theta) - 1) (r x p) - sin(theta) (r . p)."""
+    half = math.sin(0.5 * y[rot])
+    load[rot] += -2.0 * half * half * load[n] - math.sin(y[rot]) * load[n + 1]
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
 def _bdot(bvec, e, y, first, n):
     """b_e . y[first:first + n], summed from the first term (y at 0: q; at n: v)."""
     acc = bvec[e, 0] * y[first]
@@ -139,7 +147,11 @@ def _rhs(t, y, k, brk, pcoef, sig, minv, bvec, axial, rot, mult, params, cm, s, 
     r = p[1]
     cv = p[2]
     mf = p[3]
-    _load(t, k, brk, pcoef, sig, load, n)
+    if rot >= 0 and pcoef.shape[2] > n:  # forces whose arm turns with the body
+        _load(t, k, brk, pcoef, sig, load, n + 2)
+        _turn_arm(load, y, rot, n)
+    else:
+        _load(t, k, brk, pcoef, sig, load, n)
     for e in range(bvec.shape[0]):
         f, _, ok = _force(params, e, s[e], up[e], gp[e], _u_el(bvec, axial, rot, e, y, n))
         if not ok:

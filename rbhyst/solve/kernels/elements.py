@@ -295,6 +295,19 @@ def substep_load(load, j, w0, w1, pa, pb, n):
 
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def arm_moment(load, j, w, n, theta):
+    """Where forces act away from G with exact kinematics (load columns n, n + 1: r x p and
+    r . p, rbhyst.model.system.Excitation.follow): what their turned arm adds to the moment at
+    the fraction w of compute step j, (cos(theta) - 1) (r x p) - sin(theta) (r . p), and its
+    derivative in theta."""
+    x = load[j, n] + w * (load[j + 1, n] - load[j, n])
+    dd = load[j, n + 1] + w * (load[j + 1, n + 1] - load[j, n + 1])
+    half = math.sin(0.5 * theta)
+    sn = math.sin(theta)
+    return -2.0 * half * half * x - sn * dd, -sn * x - math.cos(theta) * dd
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
 def solve_in_place(a, b, n):
     """b := a^-1 b for the symmetric a (n, n) (overwritten), whose leading minors are positive
     (the matrices of a step: M / h^2 dominates). Up to n = 3 by cofactors, in registers (n is a
