@@ -929,3 +929,23 @@ def test_a_scheduler_back_within_the_timeout_costs_only_the_batches_in_flight(pr
     said = err.splitlines()
     assert len(said) == 3 and said[1].startswith(f"{n} ok, 0 failed; computed {n} on {address}"), err
     assert journal_cases(out) == n
+
+
+def test_ending_the_workers_mid_message_does_not_hang_the_sweep():
+    """A worker ended while it sent a result (Ctrl-C, a full disk that stops the sweep) leaves
+    part of a message in the pool's result pipe; the pool's manager thread then waits for the
+    rest, and closing the pool would wait for it forever (it did, once, under a full disk)."""
+    import struct
+    import threading
+
+    from rbhyst.analyses.sweep.backends import LocalPool
+
+    pool = LocalPool(1, None, False)
+    assert pool._pool.submit(os.getpid).result(timeout=120) > 0  # a worker and the manager running
+    # the start of a 1000-byte message, and no more
+    os.write(pool._pool._result_queue._writer.fileno(), struct.pack("!i", 1000) + b"x" * 10)
+    time.sleep(0.5)  # the manager is now reading it
+    closing = threading.Thread(target=pool.close, kwargs={"kill": True}, daemon=True)
+    closing.start()
+    closing.join(30.0)
+    assert not closing.is_alive(), "closing the pool hung on the half-sent result"
