@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import shutil
 import signal
 import subprocess
@@ -146,6 +147,57 @@ def test_stats_by_their_definition(project):
         assert float(s["mean"]) == pytest.approx((x[0] + x[1] + x[2]) / 3, rel=1e-15, abs=0)
     # the sine has no x2: its ag2 peak is 0, not missing
     assert {r["peak_ag2_m_s2"] for r in rows if r["motion"] == "sine"} == {"0.0"}
+
+
+def test_stats_of_many_groups_are_each_groups_own(project):
+    """stats.csv takes every (group, peak) with as many values at once: each row's numbers are
+    the bits numpy gives for that group alone, whatever the group's size, its failed cases and
+    the peaks its cases lack."""
+    from rbhyst.analyses.sweep.cases import Case
+    from rbhyst.analyses.sweep.tables import PERCENTILE, stats_table
+
+    rng = np.random.default_rng(7)
+    cases, results, number = [], {}, 0
+    for g in range(60):
+        for m in range(1 + g % 13):
+            number += 1
+            key = f"{number:032x}"
+            cases.append(Case(number, f"m{m}", 1.0, 1.0, {"body.mass": 700.0 + g}, {}, key))
+            if number % 11 == 0:
+                results[key] = {"key": key, "status": "failed", "message": "diverged"}
+                continue
+            peaks = {"u1_m": float(rng.lognormal(-4, 2)), "at1_m_s2": float(np.round(rng.random() * 3))}
+            if number % 7 == 0:
+                peaks["at1_m_s2"] = None  # a peak the case does not have
+            results[key] = {"key": key, "status": "ok", "peaks": peaks}
+    header, rows = stats_table(cases, ["body.mass"], results)
+    assert len(rows) == 60 * 2
+    for row in rows:
+        s = dict(zip(header, row))
+        members = [c for c in cases if repr(c.vary["body.mass"]) == s["body.mass"]]
+        x = np.array([results[c.key]["peaks"][s["peak"][5:]] for c in members if results[c.key]["status"] == "ok"
+                      and results[c.key]["peaks"][s["peak"][5:]] is not None])
+        assert s["count"] == len(x)
+        assert s["failed"] == sum(results[c.key]["status"] == "failed" for c in members)
+        want = ["", "", "", ""] if len(x) == 0 else [repr(float(f(x))) for f in (
+            np.mean, np.median, lambda v: np.percentile(v, PERCENTILE), np.max)]
+        assert [s["mean"], s["median"], s["p84"], s["max"]] == want
+
+
+@pytest.mark.parametrize("values, repeated", [
+    ([700, 700.0], "700.0"), ([True, 1, 1.0], "1.0"), ([0.0, -0.0], "-0.0"),
+    ([float("nan"), 1.0, float("nan")], "nan"), (["a", "b", "a"], "'a'"), ([[1, 2], [2, 1], [1, 2]], "[1, 2]"),
+    ([{"a": 1}, {"a": 1.0}], "{'a': 1.0}"), ([1, "1", True, [1], {"a": 1}, 2.5], None), (list(range(20_000)), None),
+    ([*range(20_000), 19_999.0], "19999.0"),
+])
+def test_a_repeated_vary_value_is_found_as_same_value_finds_it(project, values, repeated):
+    from rbhyst.analyses.sweep.spec import SweepSpec
+
+    if repeated is None:
+        SweepSpec.model_validate({"deck": "d.toml", "vary": {"body.mass": values}})
+        return
+    with pytest.raises(ValueError, match=re.escape(f"'body.mass': the value {repeated} is repeated")):
+        SweepSpec.model_validate({"deck": "d.toml", "vary": {"body.mass": values}})
 
 
 def test_pga_targets_scale_each_pair_to_its_larger_component(project):
@@ -877,3 +929,23 @@ def test_a_scheduler_back_within_the_timeout_costs_only_the_batches_in_flight(pr
     said = err.splitlines()
     assert len(said) == 3 and said[1].startswith(f"{n} ok, 0 failed; computed {n} on {address}"), err
     assert journal_cases(out) == n
+
+
+def test_ending_the_workers_mid_message_does_not_hang_the_sweep():
+    """A worker ended while it sent a result (Ctrl-C, a full disk that stops the sweep) leaves
+    part of a message in the pool's result pipe; the pool's manager thread then waits for the
+    rest, and closing the pool would wait for it forever (it did, once, under a full disk)."""
+    import struct
+    import threading
+
+    from rbhyst.analyses.sweep.backends import LocalPool
+
+    pool = LocalPool(1, None, False)
+    assert pool._pool.submit(os.getpid).result(timeout=120) > 0  # a worker and the manager running
+    # the start of a 1000-byte message, and no more
+    os.write(pool._pool._result_queue._writer.fileno(), struct.pack("!i", 1000) + b"x" * 10)
+    time.sleep(0.5)  # the manager is now reading it
+    closing = threading.Thread(target=pool.close, kwargs={"kill": True}, daemon=True)
+    closing.start()
+    closing.join(30.0)
+    assert not closing.is_alive(), "closing the pool hung on the half-sent result"

@@ -220,6 +220,14 @@ class LocalPool:
                     p.terminate()
             for p in procs:
                 p.join(2.0)
+            # a worker ended while it sent a result leaves part of a message in the result pipe,
+            # and the pool's manager thread waits for the rest forever (shutdown would join it
+            # forever): with every worker gone, closing this process's end of the pipe gives
+            # the reader end-of-file instead, and the manager ends as for a broken pool
+            if all(not p.is_alive() for p in procs):
+                writer = getattr(getattr(pool, "_result_queue", None), "_writer", None)
+                if writer is not None:
+                    writer.close()
         pool.shutdown(wait=True, cancel_futures=True)
         del pool
         # the pool's queues hold semaphores that only their finalizers release; the command
