@@ -25,8 +25,9 @@ SOURCES = ("model/hysteresis.py", "model/vrm.py", "model/signals.py", "solve/ker
            "solve/integrators/newmark.py")
 
 #: the numbers of coordinates a kernel whose signature says {n} is built for (one export each,
-#: ``name_n3``): the seed's plane body; a body of another n runs the JIT kernels
-SIZES = (3,)
+#: ``name_n3``): the seed's plane body and the body in space; a body of another n (one built by
+#: hand) runs the JIT kernels
+SIZES = (3, 6)
 
 #: name -> (module, function, signature); {n}: the number of coordinates (M and M^-1 are tuples
 #: of n, so that n is a compile-time constant: see rbhyst.solve.integrators.steps)
