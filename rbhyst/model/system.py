@@ -639,26 +639,75 @@ def _kernel_rows(deck: dk.Deck, body: Body, exact: bool):
     # with exact kinematics two elements deform alike only if their points also lie alike along
     # their line of action (d . r): the seed's shear isolators under P1 and P2 then part
     c_all = np.array([axial_offset(x[0], x[1], math.radians(el.angle_deg)) for x, el in zip(xs, deck.elements)])
-    key_rows = np.column_stack([b_all, c_all]) if exact else b_all
-    key = np.round(key_rows / 1e-12).astype(np.int64)  # equal where they round alike at 1e-12 (a pair split only costs time)
-    set_ids = {name: i for i, name in enumerate(deck.hysteresis)}
-    key = np.column_stack([key, [set_ids[el.hysteresis] for el in deck.elements]])
-    _, first, inverse = np.unique(key, axis=0, return_index=True, return_inverse=True)
-    inverse = inverse.ravel()
-    order = np.argsort(first)  # rows in the order of their first element
-    row_of = np.empty(len(first), dtype=int)
-    row_of[order] = np.arange(len(first))
-    rows = [b_all[first[k]] for k in order]
-    axial = np.array([c_all[first[k]] for k in order])
-    names = [deck.elements[first[k]].hysteresis for k in order]
+    firsts, row_of = _row_groups(np.column_stack([b_all, c_all]) if exact else b_all, deck)
+    rows = [b_all[f] for f in firsts]
+    axial = np.array([c_all[f] for f in firsts])
+    names = [deck.elements[f].hysteresis for f in firsts]
     mult = [0] * len(rows)
     elements = []
     for i, el in enumerate(deck.elements):
-        row = int(row_of[inverse[i]])
+        row = int(row_of[i])
         mult[row] += el.count
         elements.append(Element((float(xs[i][0]), float(xs[i][1])), el.angle_deg, el.hysteresis, el.count, row,
                                 el.stroke_limits))
     return rows, axial, names, mult, elements
+
+
+def _row_groups(keyed: np.ndarray, deck: dk.Deck) -> tuple[list[int], np.ndarray]:
+    """Elements whose rows ``keyed`` (one per element) round alike at 1e-12 and whose sets are
+    the same share a kernel row (a pair split only costs time): (each row's first element, in
+    the order of their first elements; each element's row)."""
+    key = np.round(keyed / 1e-12).astype(np.int64)
+    set_ids = {name: i for i, name in enumerate(deck.hysteresis)}
+    key = np.column_stack([key, [set_ids[el.hysteresis] for el in deck.elements]])
+    _, first, inverse = np.unique(key, axis=0, return_index=True, return_inverse=True)
+    order = np.argsort(first)  # rows in the order of their first element
+    row_of = np.empty(len(first), dtype=int)
+    row_of[order] = np.arange(len(first))
+    return [int(first[k]) for k in order], row_of[inverse.ravel()]
+
+
+def _set_stiffnesses(deck: dk.Deck) -> tuple[dict, dict, dict]:
+    """Each hysteresis set as its array, its stiffness at a reversal at u = 0 (InputError where
+    it is not positive) and k0, the larger slope of its limiting curves at u = 0."""
+    sets = {name: hs.array() for name, hs in deck.hysteresis.items()}
+    k_rev, k_el = {}, {}
+    for name, p in sets.items():
+        k = reversal_stiffness(p, 0.0)
+        if not k > 0.0:
+            raise InputError(f"hysteresis.{name}: the stiffness at a reversal at u = 0 is {k:.6g} N/m; it must be > 0")
+        k_rev[name] = k
+        k_el[name] = max(float(limiting_slope(p, 1, 0.0)), float(limiting_slope(p, -1, 0.0)), 0.0)
+    return sets, k_rev, k_el
+
+
+def _system(deck: dk.Deck, body, mass, rows, names, mult, elements, excitation, notes, dampers, weight,
+            **extra) -> System:
+    """The System of rows built by either assembly: the sets per row, Rayleigh damping from
+    their K0 where the deck asks for it, and ``extra`` (kinematics, frame, coordinates)."""
+    sets, k_rev, k_el = _set_stiffnesses(deck)
+    bvec = np.array(rows)
+    rayleigh = None
+    if deck.damping is not None and deck.damping.rayleigh is not None:
+        k0 = (bvec.T * (np.array(mult, dtype=float) * np.array([k_el[n] for n in names]))) @ bvec
+        rayleigh = rayleigh_damping(deck.damping.rayleigh, mass, k0)
+    return System(
+        title=deck.title or "",
+        body=body,
+        mass=mass,
+        bvec=bvec,
+        mult=np.array(mult, dtype=float),
+        params=np.array([sets[n] for n in names]),
+        k0=np.array([k_el[n] for n in names]),
+        k_reversal=np.array([k_rev[n] for n in names]),
+        elements=tuple(elements),
+        excitation=excitation,
+        notes=tuple(notes),
+        dampers=tuple(dampers),
+        weight=weight,
+        rayleigh=rayleigh,
+        **extra,
+    )
 
 
 def _check_sections(deck: dk.Deck, run: bool) -> None:
@@ -680,15 +729,7 @@ def assemble(deck: dk.Deck, base: Path, run: bool = True) -> System:
         return assemble_space(deck, base, run)
     body, notes = body_from_deck(deck.body)
     mass = np.array([body.mass, body.mass, body.inertia])
-
-    sets = {name: hs.array() for name, hs in deck.hysteresis.items()}
-    k_rev, k_el = {}, {}
-    for name, p in sets.items():
-        k = reversal_stiffness(p, 0.0)
-        if not k > 0.0:
-            raise InputError(f"hysteresis.{name}: the stiffness at a reversal at u = 0 is {k:.6g} N/m; it must be > 0")
-        k_rev[name] = k
-        k_el[name] = max(float(limiting_slope(p, 1, 0.0)), float(limiting_slope(p, -1, 0.0)), 0.0)
+    _set_stiffnesses(deck)  # (a set that cannot be an element says so before the elements do)
 
     exact = deck.analysis is not None and deck.analysis.kinematics == "exact"
     rows, axial, names, mult, elements = _kernel_rows(deck, body, exact)
@@ -704,31 +745,11 @@ def assemble(deck: dk.Deck, base: Path, run: bool = True) -> System:
         x = body.vertex(dp.part, dp.vertex) if dp.vertex is not None else np.asarray(dp.point, float) - body.mass_centre
         b = b_vector(x[0], x[1], math.radians(dp.angle_deg))
         dampers.append(Damper((float(x[0]), float(x[1])), dp.angle_deg, dp.c, dp.count, tuple(map(float, b))))
-    rayleigh = None
-    if deck.damping is not None and deck.damping.rayleigh is not None:
-        k0 = (bvec.T * (np.array(mult, dtype=float) * np.array([k_el[n] for n in names]))) @ bvec
-        rayleigh = rayleigh_damping(deck.damping.rayleigh, mass, k0)
     weight = None
     if deck.body.gravity is not None:
         weight = body.mass * np.array([deck.body.gravity[0], deck.body.gravity[1], 0.0])
-    system = System(
-        title=deck.title or "",
-        body=body,
-        mass=mass,
-        bvec=bvec,
-        mult=np.array(mult, dtype=float),
-        params=np.array([sets[n] for n in names]),
-        k0=np.array([k_el[n] for n in names]),
-        k_reversal=np.array([k_rev[n] for n in names]),
-        elements=tuple(elements),
-        excitation=excitation,
-        notes=tuple(notes),
-        dampers=tuple(dampers),
-        weight=weight,
-        rayleigh=rayleigh,
-        kinematics="exact" if exact else "small",
-        axial=axial if exact else None,
-    )
+    system = _system(deck, body, mass, rows, names, mult, elements, excitation, notes, dampers, weight,
+                     kinematics="exact" if exact else "small", axial=axial if exact else None)
     if exact and exact_limits(system):
         raise InputError(exact_limits(system))
     if exact and arm_turns(excitation):
@@ -807,20 +828,13 @@ def _kernel_rows_space(deck: dk.Deck, body, frame):
         ds.append(d)
         bs.append(b if frame is None else frame.T @ b)
     b_all = np.array(bs)
-    key = np.round(b_all / 1e-12).astype(np.int64)
-    set_ids = {name: i for i, name in enumerate(deck.hysteresis)}
-    key = np.column_stack([key, [set_ids[el.hysteresis] for el in deck.elements]])
-    _, first, inverse = np.unique(key, axis=0, return_index=True, return_inverse=True)
-    inverse = inverse.ravel()
-    order = np.argsort(first)
-    row_of = np.empty(len(first), dtype=int)
-    row_of[order] = np.arange(len(first))
-    rows = [b_all[first[k]] for k in order]
-    names = [deck.elements[first[k]].hysteresis for k in order]
+    firsts, row_of = _row_groups(b_all, deck)
+    rows = [b_all[f] for f in firsts]
+    names = [deck.elements[f].hysteresis for f in firsts]
     mult = [0] * len(rows)
     elements = []
     for i, el in enumerate(deck.elements):
-        r = int(row_of[inverse[i]])
+        r = int(row_of[i])
         mult[r] += el.count
         elements.append(Element(tuple(float(v) for v in xs[i]), None, el.hysteresis, el.count, r, el.stroke_limits,
                                 tuple(float(v) for v in ds[i])))
@@ -840,14 +854,7 @@ def assemble_space(deck: dk.Deck, base: Path, run: bool = True) -> System:
     body, notes = solid_from_deck(deck.body)
     j_diag, frame = principal_frame(body.inertia)
     mass = np.concatenate([[body.mass] * 3, j_diag])
-    sets = {name: hs.array() for name, hs in deck.hysteresis.items()}
-    k_rev, k_el = {}, {}
-    for name, p in sets.items():
-        k = reversal_stiffness(p, 0.0)
-        if not k > 0.0:
-            raise InputError(f"hysteresis.{name}: the stiffness at a reversal at u = 0 is {k:.6g} N/m; it must be > 0")
-        k_rev[name] = k
-        k_el[name] = max(float(limiting_slope(p, 1, 0.0)), float(limiting_slope(p, -1, 0.0)), 0.0)
+    _set_stiffnesses(deck)  # (a set that cannot be an element says so before the elements do)
     rows, names, mult, elements = _kernel_rows_space(deck, body, frame)
     bvec = np.array(rows)
     notes.extend(implausible(body, elements, FAR_ELEMENT, LARGE_BODY_M))
@@ -864,28 +871,8 @@ def assemble_space(deck: dk.Deck, base: Path, run: bool = True) -> System:
         b = b if frame is None else frame.T @ b
         dampers.append(Damper(tuple(float(v) for v in x), None, dp.c, dp.count, tuple(map(float, b)),
                               tuple(float(v) for v in d)))
-    rayleigh = None
-    if deck.damping is not None and deck.damping.rayleigh is not None:
-        k0 = (bvec.T * (np.array(mult, dtype=float) * np.array([k_el[n] for n in names]))) @ bvec
-        rayleigh = rayleigh_damping(deck.damping.rayleigh, mass, k0)
     weight = None
     if deck.body.gravity is not None:
         weight = np.concatenate([body.mass * np.asarray(deck.body.gravity, dtype=float), np.zeros(3)])
-    return System(
-        title=deck.title or "",
-        body=body,
-        mass=mass,
-        bvec=bvec,
-        mult=np.array(mult, dtype=float),
-        params=np.array([sets[n] for n in names]),
-        k0=np.array([k_el[n] for n in names]),
-        k_reversal=np.array([k_rev[n] for n in names]),
-        elements=tuple(elements),
-        excitation=excitation,
-        notes=tuple(notes),
-        dampers=tuple(dampers),
-        weight=weight,
-        rayleigh=rayleigh,
-        coordinates=SPACE,
-        frame=frame,
-    )
+    return _system(deck, body, mass, rows, names, mult, elements, excitation, notes, dampers, weight,
+                   coordinates=SPACE, frame=frame)
