@@ -565,27 +565,46 @@ def random_series(spec: "dk.Random", base: Path) -> Series:
     return Series(0.0, step, values * spec.scale if spec.scale != 1.0 else values)
 
 
-def _excitation(deck: dk.Deck, base: Path, body: Body, notes: list[str]) -> Excitation:
-    ex = deck.excitation
-    if ex is None:
-        return Excitation()
-    sig: dict[str, Signal] = {}
-    durations = []
-    problems = []
+class _Signals:
+    """An excitation's signals read one by one (paths against ``base``): what each said goes to
+    ``notes`` under its key, every problem is kept with its key until :meth:`check`."""
 
-    def add(name, spec, units, loc):
+    def __init__(self, base: Path, notes: list[str]):
+        self.base, self.notes = base, notes
+        self.read: dict[str, Signal] = {}
+        self.durations: list[float] = []
+        self.problems: list[str] = []
+
+    def add(self, name: str, spec, units, loc: str) -> None:
         if spec is None:
             return
         said: list[str] = []
         try:
-            s, dur = _signal(spec, units, base, said)
+            signal, duration = _signal(spec, units, self.base, said)
         except InputError as err:
-            problems.extend(f"{loc}: {p}" for p in err.problems)
+            self.problems.extend(f"{loc}: {p}" for p in err.problems)
             return
-        notes.extend(f"{loc}: {n}" for n in said)
-        sig[name] = s
-        if dur is not None:
-            durations.append(dur)
+        self.notes.extend(f"{loc}: {n}" for n in said)
+        self.read[name] = signal
+        if duration is not None:
+            self.durations.append(duration)
+
+    @property
+    def duration(self) -> float | None:
+        """Of the longest record or finite pulse."""
+        return max(self.durations) if self.durations else None
+
+    def check(self) -> None:
+        if self.problems:
+            raise InputError(self.problems)
+
+
+def _excitation(deck: dk.Deck, base: Path, body: Body, notes: list[str]) -> Excitation:
+    ex = deck.excitation
+    if ex is None:
+        return Excitation()
+    signals = _Signals(base, notes)
+    add = signals.add
 
     if ex.support is not None:
         add("ag1", ex.support.x1, dk.ACCEL_UNITS, "excitation.support.x1")
@@ -603,13 +622,8 @@ def _excitation(deck: dk.Deck, base: Path, body: Body, notes: list[str]) -> Exci
         else:
             # the point is given in the deck's frame; loads act about G
             point = (ex.force.point[0] - body.mass_centre[0], ex.force.point[1] - body.mass_centre[1])
-    if problems:
-        raise InputError(problems)
-    return Excitation(
-        point=point,
-        duration=max(durations) if durations else None,
-        **sig,
-    )
+    signals.check()
+    return Excitation(point=point, duration=signals.duration, **signals.read)
 
 
 def exact_limits(system) -> list[str]:
@@ -768,21 +782,8 @@ def _excitation_space(deck: dk.Deck, base: Path, body, frame, notes: list[str]) 
 
     ex = deck.excitation
     point = np.zeros(3)
-    sig, durations, problems = {}, [], []
-
-    def add(name, spec, units, loc):
-        if spec is None:
-            return
-        said: list[str] = []
-        try:
-            s, dur = _signal(spec, units, base, said)
-        except InputError as err:
-            problems.extend(f"{loc}: {p}" for p in err.problems)
-            return
-        notes.extend(f"{loc}: {n}" for n in said)
-        sig[name] = s
-        if dur is not None:
-            durations.append(dur)
+    signals = _Signals(base, notes)
+    add = signals.add
 
     if ex is not None and ex.support is not None:
         for name, axis in SUPPORT_KEYS.items():
@@ -798,13 +799,12 @@ def _excitation_space(deck: dk.Deck, base: Path, body, frame, notes: list[str]) 
                              f"({', '.join(f'{x:.6g}' for x in g)}) m")
         else:
             point = np.asarray(ex.force.point, dtype=float) - body.mass_centre
-    if problems:
-        raise InputError(problems)
+    signals.check()
     directions = load_directions(SPACE, tuple(point))
     if frame is not None:
         directions = {k: tuple(float(x) for x in frame.T @ np.array(v)) for k, v in directions.items()}
-    return Excitation(point=tuple(float(x) for x in point), duration=max(durations) if durations else None,
-                      directions=directions, **sig)
+    return Excitation(point=tuple(float(x) for x in point), duration=signals.duration,
+                      directions=directions, **signals.read)
 
 
 def _placed_space(body, entry) -> np.ndarray:
