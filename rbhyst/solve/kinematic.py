@@ -164,7 +164,7 @@ def kinematics_warning(kinematics: dict | None, warn_error: float) -> list[str]:
                 f"{worst['column']}{also}, above analysis.warn_error = {warn_error:g}; the body turns by up to "
                 f"{theta:.3g} rad: set analysis.kinematics = \"exact\""]
     if kinematics.get("bound", 0.0) > warn_error:
-        return [f"the small rotations neglect terms of about theta^2 / 2 = {kinematics['bound']:.2%} of a point's "
+        return [f"the small rotations neglect terms of about theta / 2 = {kinematics['bound']:.2%} of a point's "
                 f"motion (the body turns by up to {theta:.3g} rad), above analysis.warn_error = {warn_error:g}; "
                 "exact rotations are not built in for a 3-D body yet"]
     neglected = kinematics.get("neglected") or {}
