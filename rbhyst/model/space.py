@@ -89,21 +89,3 @@ def free_motions(bvec: np.ndarray, body: Solid, frame: np.ndarray | None) -> lis
             c = np.cross(th, u) / float(th @ th) + body.mass_centre  # the axis's point nearest G, deck frame
             out.append(f"rotation about the axis {vec(th)} through ({', '.join(f'{x + 0.0:.4g}' for x in c)}) m")
     return out
-
-
-def implausible(body: Solid, elements, far: float, large: float) -> list[str]:
-    """Notes on geometry more often a slip than intended (as in the plane): an element farther from
-    G than ``far`` body sizes, a body larger than ``large`` m."""
-    notes = []
-    size = body.extent
-    g = body.mass_centre
-    if size > large:
-        notes.append(f"body: it reaches {size:.4g} m from its mass centre: are the vertices in mm? "
-                     "(rbhyst takes every length in m)")
-    for k, el in enumerate(elements, start=1):
-        r = float(np.linalg.norm(el.x))
-        if r > far * size:
-            where = ", ".join(f"{x + c:.4g}" for x, c in zip(el.x, g))
-            notes.append(f"elements[{k}]: attached at ({where}) m, {r:.4g} m from the mass centre: "
-                         f"{r / size:.3g} times the body's size ({size:.4g} m)")
-    return notes

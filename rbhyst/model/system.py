@@ -510,9 +510,9 @@ FAR_ELEMENT = 3.0
 LARGE_BODY_M = 50.0
 
 
-def implausible_geometry(body: Body, elements) -> list[str]:
+def implausible_geometry(body, elements) -> list[str]:
     """Notes on geometry that may be intended but is more often a slip: elements far from the body,
-    a body the size of a building (vertices in mm?)."""
+    a body the size of a building (vertices in mm?); in the plane or in space."""
     notes = []
     size = body.extent
     g = body.mass_centre
@@ -522,8 +522,9 @@ def implausible_geometry(body: Body, elements) -> list[str]:
     for k, el in enumerate(elements, start=1):
         r = math.hypot(*el.x)
         if r > FAR_ELEMENT * size:
-            notes.append(f"elements[{k}]: attached at ({el.x[0] + g[0]:.4g}, {el.x[1] + g[1]:.4g}) m, {r:.4g} m from "
-                         f"the mass centre: {r / size:.3g} times the body's size ({size:.4g} m)")
+            where = ", ".join(f"{x + c:.4g}" for x, c in zip(el.x, g))
+            notes.append(f"elements[{k}]: attached at ({where}) m, {r:.4g} m from the mass centre: "
+                         f"{r / size:.3g} times the body's size ({size:.4g} m)")
     return notes
 
 
@@ -846,7 +847,7 @@ def assemble_space(deck: dk.Deck, base: Path, run: bool = True) -> System:
     ``assemble`` hands a deck in space over to it."""
     from rbhyst.model.coordinates import SPACE
     from rbhyst.model.solid import solid_from_deck
-    from rbhyst.model.space import FORCE_KEYS, SUPPORT_KEYS, free_motions, implausible, principal_frame, row, unit
+    from rbhyst.model.space import FORCE_KEYS, SUPPORT_KEYS, free_motions, principal_frame, row, unit
 
     if deck.analysis is not None and deck.analysis.kinematics == "exact":
         raise InputError('analysis.kinematics: "exact" rotations are not built in for a 3-D body yet: use '
@@ -857,7 +858,7 @@ def assemble_space(deck: dk.Deck, base: Path, run: bool = True) -> System:
     _set_stiffnesses(deck)  # (a set that cannot be an element says so before the elements do)
     rows, names, mult, elements = _kernel_rows_space(deck, body, frame)
     bvec = np.array(rows)
-    notes.extend(implausible(body, elements, FAR_ELEMENT, LARGE_BODY_M))
+    notes.extend(implausible_geometry(body, elements))
     free = free_motions(bvec, body, frame)
     if free:
         raise InputError(f"elements: the body is not restrained against {'; '.join(free)}")
