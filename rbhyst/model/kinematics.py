@@ -24,10 +24,17 @@ from __future__ import annotations
 
 import numpy as np
 
+#: the kernels' code for a body in space with exact kinematics (rbhyst.solve.kernels.layout.SPATIAL)
+SPATIAL = -2
+
 
 def rows_at(bvec: np.ndarray, axial: np.ndarray | None, rot: int, q: np.ndarray) -> np.ndarray:
     """(ne, n) the rows b_e(q) = du_e/dq at the configuration q (n,): the seed's b_e where the
-    kinematics are small (rot < 0)."""
+    kinematics are small (rot = -1); a body in space, exact (rot = -2): rbhyst.model.rotations."""
+    if rot == SPATIAL:
+        from rbhyst.model.rotations import space_rows
+
+        return space_rows(bvec, axial, np.asarray(q, dtype=float)[3:6])
     rows = np.array(bvec, dtype=float, copy=True)
     if rot >= 0:
         th = float(q[rot])
@@ -75,6 +82,19 @@ def turned_loads(p: np.ndarray, theta, n: int, rot: int) -> np.ndarray:
     return out
 
 
+def loads_at(p: np.ndarray, q: np.ndarray, n: int, rot: int, axial: np.ndarray | None = None) -> np.ndarray:
+    """(k, n) generalized loads from the load columns p (k, width) at the configurations q (k, n)
+    as the kernels take them: the plane's turned arm (``turned_loads``), or in space with exact
+    kinematics the moments in the body's axes (rbhyst.model.rotations.body_loads)."""
+    q = np.asarray(q, dtype=float)
+    if rot == SPATIAL:
+        from rbhyst.model.rotations import body_loads
+
+        return body_loads(p, np.broadcast_to(q[..., 3:6], (len(p), 3)), n, axial)
+    theta = np.broadcast_to(q[..., rot] if rot >= 0 else np.zeros(1), (len(p),))
+    return turned_loads(p, theta, n, rot)
+
+
 def exact_twin(system):
     """The same scene with exact kinematics: each kernel row split where its elements' points lie
     differently along their line of action (they deform alike only to first order), before
@@ -82,13 +102,15 @@ def exact_twin(system):
     the scene (rbhyst.model.system.exact_limits says what)."""
     from dataclasses import replace
 
-    from rbhyst.model.coordinates import PLANE
+    from rbhyst.model.coordinates import PLANE, SPACE
     from rbhyst.model.system import arm_turns, axial_offset, exact_limits
 
-    if system.coordinates != PLANE or exact_limits(system):
+    if system.coordinates not in (PLANE, SPACE) or exact_limits(system):
         return None
     if system.kinematics == "exact":
         return system
+    if system.coordinates == SPACE:
+        return _exact_twin_space(system)
     keys, rows, elements = {}, [], []
     for el in system.elements:
         c = axial_offset(el.x[0], el.x[1], np.radians(el.angle_deg))
@@ -107,3 +129,35 @@ def exact_twin(system):
     return replace(system, bvec=system.bvec[old], mult=mult, params=system.params[old], k0=system.k0[old],
                    k_reversal=system.k_reversal[old], elements=tuple(elements), static=None, excitation=excitation,
                    kinematics="exact", axial=np.array([c for _, c in rows]))
+
+
+def _exact_twin_space(system):
+    """exact_twin of a body in space: rows split where their points or lines differ (each row's
+    point and line in the kernels' rotation axes, then the force point, rbhyst.model.rotations)."""
+    from dataclasses import replace
+
+    from rbhyst.model.system import arm_turns
+
+    p = np.eye(3) if system.frame is None else np.asarray(system.frame)[3:, 3:]
+    keys, rows, elements = {}, [], []
+    for el in system.elements:
+        arm = np.concatenate([np.asarray(el.x, dtype=float) @ p, np.asarray(el.direction, dtype=float) @ p])
+        key = (el.row, *np.round(arm / 1e-12).astype(np.int64).tolist())
+        if key not in keys:
+            keys[key] = len(rows)
+            rows.append((el.row, arm))
+        elements.append(replace(el, row=keys[key]))
+    mult = np.zeros(len(rows))
+    for el in elements:
+        mult[el.row] += el.count
+    old = [r for r, _ in rows]
+    excitation = system.excitation
+    if arm_turns(excitation):
+        excitation = replace(excitation, follow=True, turning={k: tuple(float(v) for v in p.T[:, i])
+                                                               for i, k in enumerate(("p1", "p2", "p3"))})
+    if system.static is not None:  # the weight enters again with the exact equilibrium
+        excitation = replace(excitation, constant=(0.0,) * system.n)
+    axial = np.concatenate([a for _, a in rows] + [p.T @ np.asarray(system.excitation.point, dtype=float)])
+    return replace(system, bvec=system.bvec[old], mult=mult, params=system.params[old], k0=system.k0[old],
+                   k_reversal=system.k_reversal[old], elements=tuple(elements), static=None, excitation=excitation,
+                   kinematics="exact", axial=axial)

@@ -53,6 +53,10 @@ class Excitation:
     #: load carries two more columns, r x p and r . p, from which the kernels take the moment
     #: cos(theta) (r x p) - sin(theta) (r . p) at each state (rbhyst.model.kinematics.turned_loads)
     follow: bool = False
+    #: where ``follow``: the columns each force signal adds to the load, (r x e_k, r . e_k) in the
+    #: plane (from ``point``), its components along the kernels' rotation axes in space
+    #: (rbhyst.model.rotations: the kernels turn the arm r_p themselves); None: the plane's
+    turning: dict[str, tuple[float, ...]] | None = None
 
     def __post_init__(self):
         if self.directions is None:
@@ -68,8 +72,11 @@ class Excitation:
 
     @property
     def width(self) -> int:
-        """Columns of the load arrays: n, and r x p, r . p where the forces' arm turns (follow)."""
-        return self.n + 2 if self.follow else self.n
+        """Columns of the load arrays: n, and r x p, r . p where the forces' arm turns (follow) in
+        the plane, the forces' three components in space."""
+        if not self.follow:
+            return self.n
+        return self.n + (len(next(iter(self.turning.values()))) if self.turning else 2)
 
     def _constant_row(self) -> np.ndarray:
         return np.concatenate([self.constant, np.zeros(self.width - self.n)])
@@ -166,7 +173,9 @@ class Excitation:
         Without ``mass``, the forces only."""
         out = {}
         arm = {}
-        if self.follow:  # (the plane body's: exact kinematics)
+        if self.follow and self.turning is not None:
+            arm = self.turning
+        elif self.follow:  # (the plane body's: exact kinematics)
             x1, x2 = self.point
             arm = {"p1": (-x2, x1), "p2": (x1, x2)}  # (r x e_k, r . e_k) of a unit force at the point
         for k, r in self.directions.items():
@@ -177,7 +186,7 @@ class Excitation:
             else:
                 out[k] = np.array(r, dtype=float)
             if self.follow and k in out:
-                out[k] = np.concatenate([out[k], arm.get(k, (0.0, 0.0))])
+                out[k] = np.concatenate([out[k], arm.get(k, (0.0,) * (self.width - self.n))])
         return out
 
     def analytic_table(self, mass: np.ndarray) -> np.ndarray:
@@ -368,7 +377,9 @@ class System:
     #: G is at x_G + R(theta3) r for any rotation (rbhyst.model.kinematics)
     kinematics: str = "small"
     #: (ne,) each row's d_e . r_e, the offset of its body point along its line of action: with
-    #: exact kinematics u_e = b1 u1 + b2 u2 + b3 sin(theta3) + c_e (cos(theta3) - 1)
+    #: exact kinematics u_e = b1 u1 + b2 u2 + b3 sin(theta3) + c_e (cos(theta3) - 1); in space
+    #: (6 ne + 3,): each row's point and line in the kernels' rotation axes, then the force
+    #: point's (rbhyst.model.rotations.split_axial)
     axial: np.ndarray | None = None
     #: (n, n) orthogonal, or None (the identity): q in the deck's axes is ``frame @ q`` of the
     #: kernels. A body in space whose inertia tensor about G is not diagonal runs in its
@@ -385,14 +396,17 @@ class System:
             raise ValueError(f"a System of {n} coordinates (mass) has {wrong}")
         if self.kinematics not in ("small", "exact"):
             raise ValueError(f"kinematics {self.kinematics!r}: 'small' or 'exact'")
-        if self.kinematics == "exact" and (self.axial is None or self.coordinates != PLANE):
-            raise ValueError("exact kinematics are built for the plane body, with each row's axial offset")
+        if self.kinematics == "exact" and self.axial is None:
+            raise ValueError("exact kinematics need each row's axial offset (plane) or point and line (space)")
 
     @property
     def rotation_index(self) -> int:
-        """Where theta3 sits in q when the kinematics are exact; -1 (small rotations) tells the
-        compiled kernels to use the seed's linear rows u_e = b_e . q."""
-        return 2 if self.kinematics == "exact" else -1
+        """Where theta3 sits in q when the kinematics are exact in the plane; -1 (small rotations)
+        tells the compiled kernels to use the seed's linear rows u_e = b_e . q, -2 that the body
+        is in space with exact kinematics (rbhyst.solve.kernels.layout SMALL, SPATIAL)."""
+        if self.kinematics != "exact":
+            return -1
+        return 2 if self.coordinates == PLANE else -2
 
     @property
     def kernel_axial(self) -> np.ndarray:
@@ -637,8 +651,9 @@ def exact_limits(system) -> list[str]:
 
 
 def arm_turns(excitation: Excitation) -> bool:
-    """Whether p1 or p2 act away from G: with exact kinematics their moment arm turns with the body."""
-    return any(abs(x) > 0.0 for x in excitation.point) and (excitation.p1 is not None or excitation.p2 is not None)
+    """Whether p1, p2 (or p3) act away from G: with exact kinematics their moment arm turns with the body."""
+    return any(abs(x) > 0.0 for x in excitation.point) and any(
+        getattr(excitation, k) is not None for k in ("p1", "p2", "p3"))
 
 
 def _kernel_rows(deck: dk.Deck, body: Body, exact: bool):
@@ -815,11 +830,14 @@ def _placed_space(body, entry) -> np.ndarray:
     return np.asarray(entry.point, dtype=float) - body.mass_centre
 
 
-def _kernel_rows_space(deck: dk.Deck, body, frame):
-    """(rows in the kernels' axes, set names, multiplicities, Element entries in deck order):
-    elements with the same row and set share it, as in the plane."""
+def _kernel_rows_space(deck: dk.Deck, body, frame, exact: bool = False):
+    """(rows in the kernels' axes, set names, multiplicities, Element entries in deck order, and
+    with exact kinematics each row's point and line in the kernels' rotation axes (6 per row)):
+    elements with the same row and set share it, as in the plane; with exact kinematics only
+    where their points and lines are the same too (their deformations differ beyond first order)."""
     from rbhyst.model.space import row, unit
 
+    p = np.eye(3) if frame is None else frame[3:, 3:]
     xs, bs, ds = [], [], []
     for el in deck.elements:
         x = _placed_space(body, el)
@@ -829,7 +847,8 @@ def _kernel_rows_space(deck: dk.Deck, body, frame):
         ds.append(d)
         bs.append(b if frame is None else frame.T @ b)
     b_all = np.array(bs)
-    firsts, row_of = _row_groups(b_all, deck)
+    arms = np.column_stack([np.array(xs) @ p, np.array(ds) @ p])  # (x', d') = (P^T x, P^T d) per element
+    firsts, row_of = _row_groups(np.column_stack([b_all, arms]) if exact else b_all, deck)
     rows = [b_all[f] for f in firsts]
     names = [deck.elements[f].hysteresis for f in firsts]
     mult = [0] * len(rows)
@@ -839,7 +858,7 @@ def _kernel_rows_space(deck: dk.Deck, body, frame):
         mult[r] += el.count
         elements.append(Element(tuple(float(v) for v in xs[i]), None, el.hysteresis, el.count, r, el.stroke_limits,
                                 tuple(float(v) for v in ds[i])))
-    return rows, names, mult, elements
+    return rows, names, mult, elements, np.concatenate([arms[f] for f in firsts])
 
 
 def assemble_space(deck: dk.Deck, base: Path, run: bool = True) -> System:
@@ -849,14 +868,12 @@ def assemble_space(deck: dk.Deck, base: Path, run: bool = True) -> System:
     from rbhyst.model.solid import solid_from_deck
     from rbhyst.model.space import FORCE_KEYS, SUPPORT_KEYS, free_motions, principal_frame, row, unit
 
-    if deck.analysis is not None and deck.analysis.kinematics == "exact":
-        raise InputError('analysis.kinematics: "exact" rotations are not built in for a 3-D body yet: use '
-                         'kinematics = "small" (the default)')
+    exact = deck.analysis is not None and deck.analysis.kinematics == "exact"
     body, notes = solid_from_deck(deck.body)
     j_diag, frame = principal_frame(body.inertia)
     mass = np.concatenate([[body.mass] * 3, j_diag])
     _set_stiffnesses(deck)  # (a set that cannot be an element says so before the elements do)
-    rows, names, mult, elements = _kernel_rows_space(deck, body, frame)
+    rows, names, mult, elements, axial = _kernel_rows_space(deck, body, frame, exact)
     bvec = np.array(rows)
     notes.extend(implausible_geometry(body, elements))
     free = free_motions(bvec, body, frame)
@@ -875,5 +892,17 @@ def assemble_space(deck: dk.Deck, base: Path, run: bool = True) -> System:
     weight = None
     if deck.body.gravity is not None:
         weight = np.concatenate([body.mass * np.asarray(deck.body.gravity, dtype=float), np.zeros(3)])
-    return _system(deck, body, mass, rows, names, mult, elements, excitation, notes, dampers, weight,
-                   coordinates=SPACE, frame=frame)
+    if not exact:
+        return _system(deck, body, mass, rows, names, mult, elements, excitation, notes, dampers, weight,
+                       coordinates=SPACE, frame=frame)
+    p = np.eye(3) if frame is None else frame[3:, 3:]
+    axial = np.concatenate([axial, p.T @ np.asarray(excitation.point, dtype=float)])
+    if arm_turns(excitation):  # forces away from G: their three components (rotation axes) follow
+        excitation = replace(excitation, follow=True, turning={k: tuple(float(v) for v in p.T[:, i])
+                                                                for i, k in enumerate(("p1", "p2", "p3"))})
+    system = _system(deck, body, mass, rows, names, mult, elements, excitation, notes, dampers, weight,
+                     coordinates=SPACE, frame=frame, kinematics="exact", axial=axial)
+    limits = exact_limits(system)
+    if limits:
+        raise InputError(limits)
+    return system

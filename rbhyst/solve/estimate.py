@@ -63,6 +63,12 @@ RTOL_MIN = 1e-13
 #: a column whose reference stays below this fraction of its family's scale is at rest: its error
 #: is measured against the family's scale (the rotation of a symmetric scene, a cross acceleration)
 AT_REST = 1e-9
+#: a column whose peak stays below this fraction of its family's scale is small against the motion
+#: that matters (the torsion a symmetric body's rocking couples in with exact rotations, a cross
+#: acceleration): its error is stated against this fraction of the scale, so that a tiny
+#: quantity's large relative error is reported as what it is worth, and a small column that is
+#: badly wrong still is (50 % of a column at 1 % of the scale reads 10 %)
+NEGLIGIBLE = 0.05
 #: the spectra's error is estimated on runs of at most this many compute steps (the reference
 #: is then computed at each of them, as the run's spectra were driven)
 SPECTRA_ROWS = 500_000
@@ -99,7 +105,8 @@ def column_errors(values: np.ndarray, ref: np.ndarray, keys, families, system: S
     A column the reference leaves at rest (below AT_REST of its family: the rotation of a
     symmetric scene, the cross acceleration of a symmetric body) is measured against its
     family's scale instead: the largest of the family's peaks, a rotation counted at the
-    radius of gyration, a moment over it.
+    radius of gyration, a moment over it; a column below NEGLIGIBLE of that scale against
+    NEGLIGIBLE x the scale.
     """
     diff = np.max(np.abs(values - ref), axis=0)
     peak = np.max(np.abs(ref), axis=0)
@@ -109,7 +116,7 @@ def column_errors(values: np.ndarray, ref: np.ndarray, keys, families, system: S
     for fam in np.unique(families):
         mine = families == fam
         scale[mine] = np.max(peak[mine] * length[mine]) / length[mine]
-    denom = np.where(peak > AT_REST * scale, peak, scale)
+    denom = np.where(peak > AT_REST * scale, np.maximum(peak, NEGLIGIBLE * scale), scale)
     with np.errstate(invalid="ignore", divide="ignore"):
         return np.where(denom > 0, diff / denom, np.where(diff > 0, np.inf, 0.0))
 

@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from rbhyst.model.coordinates import PLANE, columns, translations
-from rbhyst.model.kinematics import point_motion_exact, turned_loads
+from rbhyst.model.kinematics import SPATIAL, point_motion_exact, turned_loads
 from rbhyst.model.points import point_columns, point_motion
 
 
@@ -106,12 +106,19 @@ class Layout:
         self._rb = system.bvec * system.mult[:, None]  # rows' share of R = sum mult b f
         # exact kinematics: the rotation's entry of b_e(q) is b3 cos(theta) - c sin(theta)
         self._rot = system.rotation_index
-        self._rc = system.kernel_axial * system.mult
+        self._rc = system.kernel_axial * system.mult if self._rot >= 0 else None
         self._minv = 1.0 / np.asarray(system.mass, dtype=float)
         self._ct = system.C.T.copy() if self.damped else None
         # a body that runs in its principal axes: its rows are turned back to the deck's
         frame = getattr(system, "frame", None)
         self._back = None if frame is None else np.asarray(frame, dtype=float).T.copy()
+        if self._rot == SPATIAL:  # a body in space, exact (rbhyst.model.rotations)
+            from rbhyst.model.rotations import matrices
+
+            self._axial = system.kernel_axial
+            self._p = np.eye(3) if frame is None else np.asarray(frame, dtype=float)[3:, 3:]
+            # the attitude displacements are measured from (the static equilibrium's), deck axes
+            self._r0 = matrices(self._p @ self.origin[3:6])[0]
 
     def index(self, name: str) -> int:
         return self.names.index(name)
@@ -123,6 +130,8 @@ class Layout:
         if out is None:
             out = np.empty((len(self.names), n)).T  # column by column: each written contiguously
         out[:, 0] = raw.t
+        if self._rot == SPATIAL:
+            return self._table_space(raw, out)
         out[:, self.slices["d"]] = raw.d - self.origin
         out[:, self.slices["v"]] = raw.v
         r = out[:, self.slices["R"]]
@@ -147,6 +156,14 @@ class Layout:
             for family in ("d", "v", "R", "at"):
                 block = out[:, self.slices[family]]
                 block[:] = block @ self._back
+        self._rest(raw, out, at)
+        return out
+
+    def _rest(self, raw: Raw, out: np.ndarray, at: np.ndarray, omega=None) -> None:
+        """The columns after G's motion, resultant and total acceleration (in the deck's axes in
+        ``out``; ``at`` their block): relative accelerations, the support, points, elements,
+        dampers, energies. omega: a body in space with exact kinematics, its angular velocity
+        in the deck's axes (its points move exactly)."""
         rel = out[:, self.slices["a"]]
         rel[:] = at
         if self.has_support:
@@ -157,7 +174,13 @@ class Layout:
         first = self.slices["points"].start
         for k, (_, x) in enumerate(self.points):
             c = first + self._point_width * k
-            if self._rot >= 0:
+            if omega is not None:
+                from rbhyst.model.rotations import point_motion_space
+
+                d = out[:, self.slices["d"]].copy()
+                d[:, 3:6] = raw.d[:, 3:6] @ self._p.T  # the attitude itself, not its turn from rest
+                point_motion_space(d, at, omega, x, self._r0, out=out[:, c:c + self._point_width])
+            elif self._rot >= 0:
                 point_motion_exact(out[:, self.slices["d"]], raw.v, at, x, raw.d[:, self._rot],
                                    float(self.origin[self._rot]), out=out[:, c:c + self._point_width])
             else:
@@ -178,6 +201,41 @@ class Layout:
             out[:, en.start + 3] = raw.e[:, 3]
             error = error - raw.e[:, 3]
         out[:, en.stop - 1] = error
+
+    def _table_space(self, raw: Raw, out: np.ndarray) -> np.ndarray:
+        """``table`` for a body in space with exact kinematics (rbhyst.model.rotations): the kernels'
+        state (u, psi; u', omega in the body's axes) to the ground's view, in the deck's axes:
+        theta the rotation vector of the turn from the start (R R0^T), omega_s = R omega,
+        alpha_s = R omega', the resultant's moment R M_b about G."""
+        from rbhyst.model.rotations import body_loads, body_rows, gyroscopic, matrices, rotation_vectors
+
+        n = len(self.coordinates)
+        psi, omega = raw.d[:, 3:6], raw.v[:, 3:6]
+        rm = matrices(psi)  # kernel axes
+        f = raw.f * self.system.mult
+        r_b = np.empty((len(raw.t), n))
+        r_b[:, :3] = f @ self.system.bvec[:, :3]
+        r_b[:, 3:] = np.einsum("ke,kei->ki", f, body_rows(self.system.bvec, self._axial, psi))
+        at = body_loads(self.system.excitation.forces(raw.t), psi, n, self._axial) - r_b
+        at[:, 3:] -= gyroscopic(self.system.mass, omega)
+        if self.damped:
+            at -= raw.v @ self._ct
+        at *= self._minv
+        turn = lambda x: np.einsum("kij,kj->ki", rm, x)  # body axes -> ground (kernel axes)
+        d = out[:, self.slices["d"]]
+        d[:, :3] = raw.d[:, :3] - self.origin[:3]
+        p = self._p
+        d[:, 3:] = rotation_vectors((p @ rm @ p.T) @ self._r0.T)  # deck axes
+        v = out[:, self.slices["v"]]
+        v[:, :3] = raw.v[:, :3]
+        v[:, 3:] = turn(omega) @ p.T
+        r = out[:, self.slices["R"]]
+        r[:, :3] = r_b[:, :3]
+        r[:, 3:] = turn(r_b[:, 3:]) @ p.T
+        a = out[:, self.slices["at"]]
+        a[:, :3] = at[:, :3]
+        a[:, 3:] = turn(at[:, 3:]) @ p.T
+        self._rest(raw, out, a, omega=v[:, 3:])
         return out
 
 

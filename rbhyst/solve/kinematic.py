@@ -44,18 +44,14 @@ def kinematics_summary(result, settings) -> dict:
     theta = max(abs(start + e.max[i]), abs(start + e.min[i]))
     out["max_rotation_rad"] = theta
     spins = [j for j, c in enumerate(system.coordinates) if c.rotation]
-    if len(spins) > 1:  # a body in space: no exact twin to measure against yet
+    if len(spins) > 1:  # a body in space: the largest angle turned, its components measured from rest
         start_q = system.to_deck(system.static.q) if system.static is not None else np.zeros(system.n)
+        start = start_q[spins]
         theta = 0.0
         for j in spins:
             i = e.names.index(system.coordinates[j].column("d"))
             theta = max(theta, abs(start_q[j] + e.max[i]), abs(start_q[j] + e.min[i]))
         out["max_rotation_rad"] = theta
-        out["difference"] = None
-        out["bound"] = theta / 2
-        out["method"] = ("not computed: exact rotations are not built in for a 3-D body yet; bound = theta_max / 2, "
-                         "about the largest share of a point's motion the neglected terms can be")
-        return out
     if system.kinematics == "exact":
         out["difference"] = None
         out["method"] = "exact rotations: no kinematic error"
@@ -64,7 +60,7 @@ def kinematics_summary(result, settings) -> dict:
         out["difference"] = None
         out["method"] = "not computed: the run kept no rows to compare"
         return out
-    indicator, where = model_residual(result, start)
+    indicator, where = (model_residual_space if len(spins) > 1 else model_residual)(result, start)
     out["neglected"] = {"column": where, "share": indicator}
     if indicator <= CHECK_FRACTION * settings.warn_error:
         out["difference"] = None
@@ -147,6 +143,54 @@ def model_residual(result, start: float) -> tuple[float, str]:
     return best, where
 
 
+def model_residual_space(result, start: np.ndarray) -> tuple[float, str]:
+    """model_residual of a body in space: the terms of second order and above in the small
+    rotation vector theta (rbhyst.model.rotations: R(theta) - I - [theta]x), in each element's
+    deformation d . ((R - I) x - theta x x), in the resultant's moment sum f (R x - x) x d, and
+    |x| |theta|^2 / 2 in each point's motion, against their peaks as in the plane."""
+    from rbhyst.model.rotations import matrices
+    from rbhyst.solve.history import estimate_columns
+
+    system, layout = result.system, result.layout
+    columns = {k: i for i, (k, _, _) in enumerate(estimate_columns(layout))}
+    rows = result.compared[:, 1:]
+    spins = [c for c in system.coordinates if c.rotation]
+    theta = start[None, :] + np.column_stack([rows[:, columns[c.key("d")]] for c in spins])
+    higher = matrices(theta) - np.eye(3)[None]  # R - I, the small rotations' [theta]x removed below
+    higher[:, 0, 1] += theta[:, 2]
+    higher[:, 0, 2] -= theta[:, 1]
+    higher[:, 1, 0] -= theta[:, 2]
+    higher[:, 1, 2] += theta[:, 0]
+    higher[:, 2, 0] += theta[:, 1]
+    higher[:, 2, 1] -= theta[:, 0]
+    xs = np.array([el.x for el in system.elements for _ in range(el.count)], dtype=float)
+    ds = np.array([el.direction for el in system.elements for _ in range(el.count)], dtype=float)
+    k0 = system.expand(system.k0[None, :])[0]
+    forces = np.column_stack([rows[:, columns[f"e{k}_f"]] for k in range(1, len(xs) + 1)])
+    best, where = 0.0, ""
+    du = np.einsum("ei,kij,ej->ke", ds, higher, xs)
+    scale = np.max(np.abs(forces), axis=0) / np.maximum(k0, 1e-300)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        share = np.where(scale > 0, np.max(np.abs(du), axis=0) / scale, 0.0)
+    if share.size and share.max() > best:
+        best, where = float(share.max()), f"e{int(share.argmax()) + 1}_u"
+    # the moment about G of the forces at their turned points, beyond the small rotations' share
+    arms = np.einsum("kij,ej->kei", matrices(theta) - np.eye(3)[None], xs) - np.cross(theta[:, None, :], xs[None])
+    dm = np.einsum("ke,kei->ki", forces, np.cross(arms, ds[None]))
+    keys = [c.key("R") for c in spins]
+    top = max(float(np.max(np.abs(rows[:, columns[k]]))) for k in keys)
+    if top > 0 and np.max(np.abs(dm)) / top > best:
+        best, where = float(np.max(np.abs(dm)) / top), keys[int(np.argmax(np.max(np.abs(dm), axis=0)))]
+    turn = float(np.max(np.linalg.norm(theta, axis=1)))
+    for name, x in layout.points:
+        keys = [k for k in columns if k.startswith(f"{name}_") and k[len(name) + 1:].startswith("u")]
+        top = max(np.max(np.abs(rows[:, columns[k]])) for k in keys) if keys else 0.0
+        miss = float(np.linalg.norm(x)) * turn ** 2 / 2
+        if top > 0 and miss / top > best:
+            best, where = miss / top, keys[0]
+    return best, where
+
+
 def kinematics_warning(kinematics: dict | None, warn_error: float) -> list[str]:
     """One warning where the small rotations cost more than warn_error (or may, where it was
     not computed), with the numbers and what to do."""
@@ -163,10 +207,6 @@ def kinematics_warning(kinematics: dict | None, warn_error: float) -> list[str]:
         return [f"the seed's small rotations (eqs. 7-8) differ from exact kinematics by {worst['difference']:.2%} in "
                 f"{worst['column']}{also}, above analysis.warn_error = {warn_error:g}; the body turns by up to "
                 f"{theta:.3g} rad: set analysis.kinematics = \"exact\""]
-    if kinematics.get("bound", 0.0) > warn_error:
-        return [f"the small rotations neglect terms of about theta / 2 = {kinematics['bound']:.2%} of a point's "
-                f"motion (the body turns by up to {theta:.3g} rad), above analysis.warn_error = {warn_error:g}; "
-                "exact rotations are not built in for a 3-D body yet"]
     neglected = kinematics.get("neglected") or {}
     if neglected.get("share", 0.0) > warn_error:
         return [f"the terms the seed's small rotations (eqs. 7-8) neglect reach {neglected['share']:.2%} of "

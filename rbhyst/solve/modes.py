@@ -146,8 +146,17 @@ def tangent_at_rest(system) -> np.ndarray:
     from rbhyst.solve.kernels.layout import F
 
     rot = system.rotation_index
-    rows = rows_at(system.bvec, system.axial, rot, static.q)
+    rows = rows_at(system.bvec, system.kernel_axial, rot, static.q)
     k = (rows.T * (system.mult * static.st[:, TANGENT])) @ rows
+    if rot < 0:  # in space: d(x x R^T d')/d(turn) = -((x . a) I - a x^T), a = R^T d' (rbhyst.model.rotations)
+        from rbhyst.model.rotations import matrices, split_axial
+
+        x, c, _ = split_axial(system.kernel_axial, len(rows))
+        a = c @ matrices(static.q[3:6])[0]  # rows: (R^T d')^T
+        mf = system.mult * static.st[:, F]
+        geo = -(np.einsum("e,ei,ei->", mf, x, a) * np.eye(3) - np.einsum("e,ei,ej->ij", mf, a, x))
+        k[3:, 3:] += 0.5 * (geo + geo.T)
+        return k
     th = float(static.q[rot])
     k[rot, rot] -= float(np.sum(system.mult * static.st[:, F] * (system.bvec[:, rot] * np.sin(th)
                                                                  + system.axial * np.cos(th))))

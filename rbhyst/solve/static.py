@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from rbhyst.solve.kernels import layout as kernels
+from rbhyst.solve.kernels.layout import SPATIAL
 from rbhyst.errors import AnalysisError
 
 INCREMENTS = 50
@@ -61,7 +62,7 @@ def static_equilibrium(system) -> Static:
         target = w * (k / INCREMENTS)
         for it in range(MAX_ITERATIONS):
             r = np.zeros(n)
-            ok, bad, _, kgeo = update_elements(bvec, axial, rot, mult, params, q, st, cur, kpeak, r, bq, n)
+            ok, bad, _, kgeo = update_elements(bvec, axial, rot, mult, params, q, q, st, cur, kpeak, r, bq, n)
             if not ok:
                 raise AnalysisError(f"static equilibrium under gravity: element row {bad + 1} left its calibrated "
                                     "range (exp overflow): the elements cannot carry the weight")
@@ -72,6 +73,8 @@ def static_equilibrium(system) -> Static:
             kt = (bq.T * (mult * kpeak[:, 1])) @ bq
             if rot >= 0:
                 kt[rot, rot] += kgeo
+            # (in space, exact: rows for a turn in the body's axes; the forces' geometric stiffness
+            # left out of the Jacobian, so the iterations converge linearly, to the same tolerance)
             try:
                 dq = np.linalg.solve(kt, res)
             except np.linalg.LinAlgError:
@@ -79,13 +82,23 @@ def static_equilibrium(system) -> Static:
             if not np.all(np.isfinite(dq)):
                 raise AnalysisError(f"static equilibrium under gravity: at {k / INCREMENTS:.0%} of the weight the "
                                     "elements' tangent stiffness is singular: they cannot carry it")
-            q = q + dq
+            q = q + dq if rot != SPATIAL else _turned(q, dq)
         else:
             raise AnalysisError(f"static equilibrium under gravity: Newton iterations did not converge at "
                                 f"{k / INCREMENTS:.0%} of the weight (out of balance {np.max(np.abs(res)):.3g} N): "
                                 "the elements cannot carry it")
         cur = 1 - cur  # the trial state becomes the committed one
     return Static(q=q, st=st[cur].copy(), r=r, residual=float(np.max(np.abs(w - r)) / scale), iterations=total)
+
+
+def _turned(q: np.ndarray, dq: np.ndarray) -> np.ndarray:
+    """q + dq for a body in space with exact kinematics: the turn dq[3:6] (body axes) composed on
+    the attitude (rbhyst.model.rotations)."""
+    from rbhyst.model.rotations import matrices, rotation_vectors
+
+    out = q + dq
+    out[3:6] = rotation_vectors(matrices(q[3:6]) @ matrices(dq[3:6]))[0]
+    return out
 
 
 def at_rest_under_gravity(system):
@@ -97,4 +110,9 @@ def at_rest_under_gravity(system):
     st = static_equilibrium(system)
     # the load that holds the body exactly at rest there is the elements' resultant (the
     # weight to within the iterations' 1e-13): without excitation, rest stays rest to the bit
-    return replace(system, static=st, excitation=replace(system.excitation, constant=tuple(map(float, st.r))))
+    held = st.r
+    if system.rotation_index == SPATIAL:  # the kernels take a load's moments in the ground's axes
+        from rbhyst.model.rotations import matrices
+
+        held = np.concatenate([st.r[:3], matrices(st.q[3:6])[0] @ st.r[3:6]])
+    return replace(system, static=st, excitation=replace(system.excitation, constant=tuple(map(float, held))))

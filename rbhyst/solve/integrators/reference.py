@@ -42,7 +42,7 @@ from rbhyst.solve.integrators import dop853_tableau as _dop
 from rbhyst.errors import AnalysisError
 from rbhyst.solve.kernels.compiled import kernel
 from rbhyst.solve.kernels.dop853_layout import (NS, R_ELEMENT, R_EVENTS, R_FEV, R_HMAX, R_HMIN, R_INFO, R_REJECTED, R_START_FLIPS, R_STATUS, R_STEPS, R_TIME, ST_NONFINITE, ST_OK, ST_OVERFLOW, ST_STEP_TOO_SMALL, ST_TOO_MANY_STEPS, ny)
-from rbhyst.model.kinematics import rows_at, turned_loads
+from rbhyst.model.kinematics import loads_at, rows_at
 from rbhyst.model.records import Series
 from rbhyst.model.signals import SINE
 from rbhyst.solve.history import Layout, Raw
@@ -195,15 +195,14 @@ def _initial_branches(system, pieces: Pieces):
     h = 1e-6 * first
     static = getattr(system, "static", None)
     q0 = static.q if static is not None else np.zeros(system.n)
-    rot = system.rotation_index
-    p0, p1 = turned_loads(pieces.at(np.array([0.0, h])), np.full(2, q0[rot] if rot >= 0 else 0.0), system.n, rot)
+    p0, p1 = loads_at(pieces.at(np.array([0.0, h])), q0[None], system.n, system.rotation_index, system.kernel_axial)
     dp0 = (p1 - p0) / h  # the load's slope at the start, from inside the first piece
     if static is not None:
         p0 = p0 - static.r  # the weight is carried by the elements
     a0 = p0 / system.mass
     j0 = dp0 / system.mass
     # the rows where the body starts (they differ from b only at a turned static equilibrium)
-    rows = rows_at(system.bvec, system.axial, system.rotation_index, q0)
+    rows = rows_at(system.bvec, system.kernel_axial, system.rotation_index, q0)
     s = np.sign(rows @ a0)
     s2 = np.sign(rows @ j0)
     s = np.where(s != 0, s, np.where(s2 != 0, s2, 1.0))

@@ -14,6 +14,15 @@ half as long again). Every constant matrix
 of a step comes inverted from Python per substep level (``coef``, each method's
 ``coefficients``), so explicit steps only multiply; Newmark's Newton matrix changes with the
 tangent and is solved in place. Sums run from the first term, in the order of q.
+
+A body in space with exact kinematics (rot = SPATIAL, rbhyst.model.rotations) steps in its own
+axes: v[3:6] is its angular velocity and a[3:6] its derivative in the body's principal axes,
+d[3:6] its rotation vector; each method's displacement update gives the turn of the step,
+which the loop composes on the right when the step is accepted (rbhyst.solve.kernels.rotations);
+the moments of the load are turned into the body's axes at both ends of the step, and Euler's
+gyroscopic term omega x J omega joins the restoring force, taken at the velocity the step
+predicts for its end (v + h a: an O(h^2) error in a step's acceleration, an O(h^3) one in its
+velocity, so every method keeps its order).
 """
 
 import math
@@ -24,6 +33,8 @@ from rbhyst.solve.kernels.layout import (NEWTON_FAILED, W_A, W_AN, W_D, W_DN, W_
                                          W_Y)
 from rbhyst.solve.kernels.elements import (arm_moment, bbt_sums, mat_row, row_dot, solve_in_place, start_rows,
                                            substep_load, update_elements)
+from rbhyst.solve.kernels.layout import SPATIAL
+from rbhyst.solve.kernels.rotations import add_geometric, body_load, gyroscopic, rotation, turned
 from rbhyst.solve.integrators import central_difference, chang, kr_alpha, newmark
 from rbhyst.solve.integrators.chang import B1, B2, MC_INV
 from rbhyst.solve.integrators.kr_alpha import A_A, A_V, D_A, V_A, V_ANEW, X_NEW, X_OLD
@@ -36,7 +47,8 @@ KR_ALPHA = kr_alpha.KERNEL_ID
 
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
-def chang_step(coef, lv, minv, cm, damped, bvec, axial, rot, mult, params, st, cur, w, load, j, w0, w1, h, kpeak, bq):
+def chang_step(coef, lv, mass, minv, cm, damped, bvec, axial, rot, mult, params, st, cur, w, load, j, w0, w1, h, kpeak,
+               bq):
     """One step of Chang's method (coef = B1, B2, (M + h/2 C)^-1) or of central difference
     (B1 = I, B2 = I/2), from the element state st[cur] into st[1 - cur] and from w[W_D, W_V,
     W_A] into w[W_DN, W_VN, W_AN] (R(d+) in w[W_R], the load in w[W_PA], w[W_PB]).
@@ -54,11 +66,20 @@ def chang_step(coef, lv, minv, cm, damped, bvec, axial, rot, mult, params, st, c
     if rot >= 0 and load.shape[1] > n:  # forces whose arm turns with the body
         w[W_PA, rot] += arm_moment(load, j, w0, n, d[rot])[0]
         pb[rot] += arm_moment(load, j, w1, n, dn[rot])[0]
-    ok, bad, work, kgeo = update_elements(bvec, axial, rot, mult, params, dn, st, cur, kpeak, r, bq, n)
+    elif rot == SPATIAL:  # the moments in the body's axes at both ends
+        body_load(rotation(d[3], d[4], d[5]), load, j, w0, n, axial, w[W_PA])
+        body_load(turned(d, dn), load, j, w1, n, axial, pb)
+    ok, bad, work, kgeo = update_elements(bvec, axial, rot, mult, params, d, dn, st, cur, kpeak, r, bq, n)
     if not ok:
         return False, bad, 0.0
     for i in range(n):
         x[i] = pb[i] - r[i]
+    if rot == SPATIAL:
+        y = w[W_Y]
+        for i in range(n):
+            y[i] = v[i] + h * a[i]
+        for i in range(3, 6):
+            x[i] -= gyroscopic(mass, y, i)
     if damped:
         y = w[W_Y]
         for i in range(n):
@@ -76,8 +97,8 @@ def chang_step(coef, lv, minv, cm, damped, bvec, axial, rot, mult, params, st, c
 
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
-def kr_alpha_step(coef, lv, minv, cm, damped, bvec, axial, rot, mult, params, st, cur, w, load, j, w0, w1, h, kpeak,
-                  bq):
+def kr_alpha_step(coef, lv, mass, minv, cm, damped, bvec, axial, rot, mult, params, st, cur, w, load, j, w0, w1, h,
+                  kpeak, bq):
     """One step of the KR-alpha method (Kolay and Ricles 2014), v being the velocity at t:
 
         d+ = d + h v + h^2 (A2 - gamma I) a
@@ -92,7 +113,7 @@ def kr_alpha_step(coef, lv, minv, cm, damped, bvec, axial, rot, mult, params, st
     d, v, a = w[W_D], w[W_V], w[W_A]
     dn, vn, an = w[W_DN], w[W_VN], w[W_AN]
     pa, pb, r, rn, x, y = w[W_PA], w[W_PB], w[W_R], w[W_RN], w[W_X], w[W_Y]
-    start_rows(bvec, axial, rot, mult, st, cur, d, rn, n)
+    start_rows(bvec, axial, rot, mult, st, cur, d, rn, bq, n)
     substep_load(load, j, w0, w1, pa, pb, n)
     hh = h * h
     for i in range(n):
@@ -100,12 +121,21 @@ def kr_alpha_step(coef, lv, minv, cm, damped, bvec, axial, rot, mult, params, st
     if rot >= 0 and load.shape[1] > n:  # forces whose arm turns with the body
         pa[rot] += arm_moment(load, j, w0, n, d[rot])[0]
         pb[rot] += arm_moment(load, j, w1, n, dn[rot])[0]
-    ok, bad, work, kgeo = update_elements(bvec, axial, rot, mult, params, dn, st, cur, kpeak, r, bq, n)
+    elif rot == SPATIAL:  # the moments in the body's axes at both ends
+        body_load(rotation(d[3], d[4], d[5]), load, j, w0, n, axial, pa)
+        body_load(turned(d, dn), load, j, w1, n, axial, pb)
+    ok, bad, work, kgeo = update_elements(bvec, axial, rot, mult, params, d, dn, st, cur, kpeak, r, bq, n)
     if not ok:
         return False, bad, 0.0
     for i in range(n):
         x[i] = pb[i] - r[i]
         y[i] = pa[i] - rn[i]
+    if rot == SPATIAL:  # Euler's term at the start and at the end the step predicts (vn: work space)
+        for i in range(n):
+            vn[i] = v[i] + h * a[i]
+        for i in range(3, 6):
+            x[i] -= gyroscopic(mass, vn, i)
+            y[i] -= gyroscopic(mass, v, i)
     for i in range(n):
         an[i] = mat_row(coef, lv, X_NEW, i, x, n) + mat_row(coef, lv, X_OLD, i, y, n) - mat_row(coef, lv, A_A, i, a, n)
     if damped:
@@ -142,18 +172,28 @@ def newmark_step(mass, cm, damped, bvec, axial, rot, mult, params, st, cur, w, w
         dn[i] = d[i] + h * v[i] + 0.5 * h * h * a[i]
     follow = rot >= 0 and load.shape[1] > n  # forces whose arm turns with the body
     pb_rot = 0.0
+    m3 = m4 = m5 = 0.0
     if follow:
         w[W_PA, rot] += arm_moment(load, j, w0, n, d[rot])[0]
         pb_rot = pb[rot]
+    elif rot == SPATIAL:  # the moments in the body's axes at the start; at the end they turn with d+
+        body_load(rotation(d[3], d[4], d[5]), load, j, w0, n, axial, w[W_PA])
+        m3, m4, m5 = pb[3], pb[4], pb[5]
     for it in range(max_iter):
-        ok, bad, work, kgeo = update_elements(bvec, axial, rot, mult, params, dn, st, cur, kpeak, r, bq, n)
+        ok, bad, work, kgeo = update_elements(bvec, axial, rot, mult, params, d, dn, st, cur, kpeak, r, bq, n)
         if not ok:
             return False, bad, 0.0, it + 1
         if follow:
             extra, slope = arm_moment(load, j, w1, n, dn[rot])
             pb[rot] = pb_rot + extra
             kgeo -= slope  # the load's share of the Jacobian: d(R - p)/dtheta
-        if rot >= 0:
+        elif rot == SPATIAL:
+            pb[3], pb[4], pb[5] = m3, m4, m5
+            body_load(turned(d, dn), load, j, w1, n, axial, pb)
+        if rot == SPATIAL:
+            bbt_sums(bq, mult, kpeak, 1, mass, False, wm, w[W_Q])
+            add_geometric(axial, mult, st, 1 - cur, turned(d, dn), wm)
+        elif rot >= 0:
             bbt_sums(bq, mult, kpeak, 1, mass, False, wm, w[W_Q])
             wm[rot, rot] += kgeo  # the rows turn with the body: the forces' geometric stiffness
         else:
@@ -161,6 +201,11 @@ def newmark_step(mass, cm, damped, bvec, axial, rot, mult, params, st, cur, w, w
         for i in range(n):
             wm[i, i] += c * mass[i]
             g[i] = mass[i] * (c * (dn[i] - d[i] - h * v[i]) - a[i]) + r[i] - pb[i]
+        if rot == SPATIAL:  # Euler's term at the step's end (its Jacobian, O(h omega) of M's, left out)
+            for i in range(n):
+                vn[i] = v[i] + 0.5 * h * (a[i] + c * (dn[i] - d[i] - h * v[i]) - a[i])
+            for i in range(3, 6):
+                g[i] += gyroscopic(mass, vn, i)
         if damped:
             for i in range(n):
                 z[i] = cv * (dn[i] - d[i]) - v[i]
@@ -208,10 +253,10 @@ def take_step(method, coef, lv, mass, minv, cm, damped, bvec, axial, rot, mult, 
         return newmark_step(mass, cm, damped, bvec, axial, rot, mult, params, st, cur, w, wm, load, j, w0, w1, h,
                             kpeak, bq, tol, max_iter)
     if method == KR_ALPHA:
-        ok, bad, work = kr_alpha_step(coef, lv, minv, cm, damped, bvec, axial, rot, mult, params, st, cur, w, load,
+        ok, bad, work = kr_alpha_step(coef, lv, mass, minv, cm, damped, bvec, axial, rot, mult, params, st, cur, w, load,
                                       j, w0, w1, h, kpeak, bq)
         return ok, bad, work, 1
     # Chang's method and central difference share their step (their coefficients differ)
-    ok, bad, work = chang_step(coef, lv, minv, cm, damped, bvec, axial, rot, mult, params, st, cur, w, load, j, w0,
+    ok, bad, work = chang_step(coef, lv, mass, minv, cm, damped, bvec, axial, rot, mult, params, st, cur, w, load, j, w0,
                                w1, h, kpeak, bq)
     return ok, bad, work, 1

@@ -19,7 +19,7 @@ PACKAGE = Path(__file__).resolve().parents[2]
 
 #: every source file whose code (or constants) the exported kernels compile in
 SOURCES = ("model/hysteresis.py", "model/vrm.py", "model/signals.py", "solve/kernels/layout.py",
-           "solve/kernels/elements.py", "solve/kernels/loop.py", "solve/kernels/csvfmt.py", "solve/kernels/reduce.py",
+           "solve/kernels/elements.py", "solve/kernels/rotations.py", "solve/kernels/loop.py", "solve/kernels/csvfmt.py", "solve/kernels/reduce.py",
            "solve/kernels/dop853.py", "solve/kernels/dop853_layout.py", "solve/integrators/steps.py",
            "solve/integrators/chang.py", "solve/integrators/central_difference.py", "solve/integrators/kr_alpha.py",
            "solve/integrators/newmark.py")

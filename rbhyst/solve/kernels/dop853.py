@@ -17,6 +17,8 @@ from rbhyst.model.hysteresis import ALPHA, EXP_ARG_MAX
 from rbhyst.solve.kernels.dop853_layout import (NS, R_ELEMENT, R_EVENTS, R_FEV, R_HMAX, R_HMIN, R_REJECTED, R_START_FLIPS, R_STATUS, R_STEPS, R_TIME, SIMULTANEOUS, ST_NONFINITE, ST_OK, ST_OVERFLOW, ST_STEP_TOO_SMALL, ST_TOO_MANY_STEPS)
 from rbhyst.model.signals import HALF_SINE, HAVERSINE, ROW_SIZE as ROW, SAWTOOTH, SINE
 from rbhyst.model.vrm import branch_eval, branch_row
+from rbhyst.solve.kernels.layout import SPATIAL
+from rbhyst.solve.kernels.rotations import arm, attitude_rate, centripetal, rotation, turn_moments
 
 
 # --------------------------------------------------------------------------
@@ -98,7 +100,10 @@ def _bdot(bvec, e, y, first, n):
 def _u_el(bvec, axial, rot, e, y, n):
     """Element e's deformation at q = y[:n]: b_e . q, or with exact kinematics (rot >= 0)
     b_e . q with b_rot sin(theta) + axial_e (cos(theta) - 1) for b_rot theta
-    (rbhyst.solve.kernels.elements.update_elements)."""
+    (rbhyst.solve.kernels.elements.update_elements); in space (rot = SPATIAL) d . (u + R x - x)."""
+    if rot == SPATIAL:
+        t = arm(axial, e, rotation(y[3], y[4], y[5]))
+        return bvec[e, 0] * y[0] + bvec[e, 1] * y[1] + bvec[e, 2] * y[2] + t[0]
     if rot < 0:
         return _bdot(bvec, e, y, 0, n)
     acc = 0.0
@@ -112,6 +117,10 @@ def _u_el(bvec, axial, rot, e, y, n):
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
 def _v_el(bvec, axial, rot, e, y, n):
     """Element e's deformation rate b_e(q) . v at the state y = (q, v, ...)."""
+    if rot == SPATIAL:
+        t = arm(axial, e, rotation(y[3], y[4], y[5]))
+        return (bvec[e, 0] * y[n] + bvec[e, 1] * y[n + 1] + bvec[e, 2] * y[n + 2]
+                + t[1] * y[n + 3] + t[2] * y[n + 4] + t[3] * y[n + 5])
     if rot < 0:
         return _bdot(bvec, e, y, n, n)
     acc = 0.0
@@ -124,7 +133,13 @@ def _v_el(bvec, axial, rot, e, y, n):
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
 def _a_el(bvec, axial, rot, e, y, f, n):
     """The time derivative of _v_el at the state y whose derivative is f = (v, a, ...):
-    b_e(q) . a, plus omega^2 d2u_e/dtheta2 with exact kinematics."""
+    b_e(q) . a, plus omega^2 d2u_e/dtheta2 with exact kinematics (in space, the point's
+    centripetal acceleration along the line)."""
+    if rot == SPATIAL:
+        t = arm(axial, e, rotation(y[3], y[4], y[5]))
+        return (bvec[e, 0] * f[n] + bvec[e, 1] * f[n + 1] + bvec[e, 2] * f[n + 2]
+                + t[1] * f[n + 3] + t[2] * f[n + 4] + t[3] * f[n + 5]
+                + centripetal(axial, e, t, y[n + 3], y[n + 4], y[n + 5]))
     if rot < 0:
         return _bdot(bvec, e, f, n, n)
     acc = 0.0
@@ -147,6 +162,8 @@ def _rhs(t, y, k, brk, pcoef, sig, minv, bvec, axial, rot, mult, params, cm, s, 
     r = p[1]
     cv = p[2]
     mf = p[3]
+    if rot == SPATIAL:  # a body in space, exact: its own axes (rbhyst.solve.kernels.rotations)
+        return _rhs_spatial(t, y, k, brk, pcoef, sig, minv, bvec, axial, mult, params, cm, s, up, gp, p, dy)
     if rot >= 0 and pcoef.shape[2] > n:  # forces whose arm turns with the body
         _load(t, k, brk, pcoef, sig, load, n + 2)
         _turn_arm(load, y, rot, n)
@@ -169,6 +186,14 @@ def _rhs(t, y, k, brk, pcoef, sig, minv, bvec, axial, rot, mult, params, cm, s, 
             for e in range(bvec.shape[0]):
                 acc += mf[e] * bvec[e, i]
         r[i] = acc
+    _finish_rhs(y, minv, cm, load, r, cv, dy, n)
+    return -1
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _finish_rhs(y, minv, cm, load, r, cv, dy, n):
+    """dy = (v, M^-1 (p - R - C v), p . v, v . C v) once p (in load) and R are known; dy[:n] is
+    left to the caller where it is not v."""
     for i in range(n):
         dy[i] = y[n + i]
         acc = cm[i, 0] * y[n]
@@ -184,6 +209,52 @@ def _rhs(t, y, k, brk, pcoef, sig, minv, bvec, axial, rot, mult, params, cm, s, 
         viscous += cv[i] * y[n + i]
     dy[2 * n] = power
     dy[2 * n + 1] = viscous
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _rhs_spatial(t, y, k, brk, pcoef, sig, minv, bvec, axial, mult, params, cm, s, up, gp, p, dy):
+    """_rhs for a body in space with exact kinematics: q = (u, psi), v = (u', omega) with omega
+    in the body's axes; psi' = J_r(psi)^-1 omega, M v' = p - R - C v - (0, omega x J omega), the
+    moments of p and R in the body's axes (rbhyst.solve.kernels.rotations)."""
+    n = len(minv)
+    load = p[0]
+    r = p[1]
+    cv = p[2]
+    mf = p[3]
+    rm = rotation(y[3], y[4], y[5])
+    if pcoef.shape[2] > n:  # forces away from G: their components, after the n loads
+        _load(t, k, brk, pcoef, sig, load, n + 3)
+        turn_moments(rm, load, load[n], load[n + 1], load[n + 2], axial)
+    else:
+        _load(t, k, brk, pcoef, sig, load, n)
+        turn_moments(rm, load, 0.0, 0.0, 0.0, axial)
+    for i in range(n):
+        r[i] = 0.0
+    for e in range(bvec.shape[0]):
+        a = arm(axial, e, rm)
+        u = bvec[e, 0] * y[0] + bvec[e, 1] * y[1] + bvec[e, 2] * y[2] + a[0]
+        f, _, ok = _force(params, e, s[e], up[e], gp[e], u)
+        if not ok:
+            return e
+        m = mult[e] * f
+        r[0] += m * bvec[e, 0]
+        r[1] += m * bvec[e, 1]
+        r[2] += m * bvec[e, 2]
+        r[3] += m * a[1]
+        r[4] += m * a[2]
+        r[5] += m * a[3]
+    # Euler's term omega x J omega, with the restoring moments (J = diag(M^-1)^-1 in the principal axes)
+    w0, w1, w2 = y[n + 3], y[n + 4], y[n + 5]
+    k3 = n - 3  # (3: the index is not a literal, so that the plane's n = 3 compiles this too)
+    j0, j1, j2 = 1.0 / minv[k3], 1.0 / minv[k3 + 1], 1.0 / minv[k3 + 2]
+    r[3] += (j2 - j1) * w1 * w2
+    r[4] += (j0 - j2) * w2 * w0
+    r[5] += (j1 - j0) * w0 * w1
+    _finish_rhs(y, minv, cm, load, r, cv, dy, n)
+    d0, d1, d2 = attitude_rate(y[3], y[4], y[5], y[n + 3], y[n + 4], y[n + 5])
+    dy[3] = d0
+    dy[4] = d1
+    dy[5] = d2
     return -1
 
 
@@ -203,6 +274,12 @@ def _dense(F, y_old, x, i):
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
 def _g_dense(F, y_old, x, bvec, axial, rot, e, s, n):
     """s_e (b_e(q) . v) on the dense output: positive while the element moves along its branch."""
+    if rot == SPATIAL:
+        t = arm(axial, e, rotation(_dense(F, y_old, x, 3), _dense(F, y_old, x, 4), _dense(F, y_old, x, 5)))
+        w = bvec[e, 0] * _dense(F, y_old, x, n) + bvec[e, 1] * _dense(F, y_old, x, n + 1) \
+            + bvec[e, 2] * _dense(F, y_old, x, n + 2)
+        w += t[1] * _dense(F, y_old, x, n + 3) + t[2] * _dense(F, y_old, x, n + 4) + t[3] * _dense(F, y_old, x, n + 5)
+        return s * w
     if rot < 0:
         w = bvec[e, 0] * _dense(F, y_old, x, n)
         for i in range(1, n):

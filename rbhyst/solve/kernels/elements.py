@@ -10,7 +10,8 @@ import math
 from numba import njit
 
 from rbhyst.model.vrm import vrm_update
-from rbhyst.solve.kernels.layout import A, F, G, K, S, U
+from rbhyst.solve.kernels.layout import A, F, G, K, S, SPATIAL, U
+from rbhyst.solve.kernels.rotations import element_row, rotation, turned
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
@@ -82,7 +83,7 @@ def sym_max_eig(a, n):
 
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
-def update_elements(bvec, axial, rot, mult, params, q, st, cur, kpeak, r, bq, n):
+def update_elements(bvec, axial, rot, mult, params, q0, q, st, cur, kpeak, r, bq, n):
     """Elements at the new configuration q (n,) (eqs. 5-11): u_e = b_e . q, R = sum mult b f.
 
     st: (2, ne, 6) element states; st[cur] holds the state at the start of the step
@@ -94,7 +95,11 @@ def update_elements(bvec, axial, rot, mult, params, q, st, cur, kpeak, r, bq, n)
     rot >= 0: exact kinematics about the coordinate q[rot] (rbhyst.model.kinematics):
     u_e = sum_i b_i q_i (i != rot) + b_rot sin(theta) + axial_e (cos(theta) - 1), its row
     b_e(q) = du_e/dq into bq (ne, n), and the geometric stiffness sum mult f d2u_e/dtheta2
-    returned; rot < 0: the seed's rows, bq untouched.
+    returned; rot = SPATIAL: a body in space with exact kinematics, the step from q0 to q
+    turning it by q[3:6] - q0[3:6] in its own axes (rbhyst.solve.kernels.rotations), u_e =
+    d . (u + R x - x) and b_e(q) = (d, x x R^T d) in bq (rotations.element_row), no geometric
+    stiffness returned (Newmark's Newton matrix goes without it in space: its iterations
+    converge to the same tolerance); rot = SMALL: the seed's rows, bq untouched.
     Returns (ok, bad element, work of all element forces over the step, geometric stiffness).
     """
     for i in range(n):
@@ -104,13 +109,18 @@ def update_elements(bvec, axial, rot, mult, params, q, st, cur, kpeak, r, bq, n)
     sn = 0.0
     cs = 1.0
     cm1 = 0.0
+    rm = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
     if rot >= 0:
         sn = math.sin(q[rot])
         cs = math.cos(q[rot])
         half = math.sin(0.5 * q[rot])
         cm1 = -2.0 * half * half  # cos - 1 without cancellation
+    elif rot == SPATIAL:
+        rm = turned(q0, q)
     for e in range(bvec.shape[0]):
-        if rot >= 0:
+        if rot == SPATIAL:
+            u = element_row(bvec, axial, e, rm, q, bq)
+        elif rot >= 0:
             u = 0.0
             for i in range(n):
                 if i != rot:
@@ -142,6 +152,9 @@ def update_elements(bvec, axial, rot, mult, params, q, st, cur, kpeak, r, bq, n)
             for i in range(n):
                 r[i] += mf * bq[e, i]
             kgeo -= mf * (bvec[e, rot] * sn + axial[e] * cs)
+        elif rot == SPATIAL:
+            for i in range(n):
+                r[i] += mf * bq[e, i]
         else:
             for i in range(n):
                 r[i] += mf * bvec[e, i]
@@ -149,18 +162,26 @@ def update_elements(bvec, axial, rot, mult, params, q, st, cur, kpeak, r, bq, n)
 
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
-def start_rows(bvec, axial, rot, mult, st, cur, q, r, n):
+def start_rows(bvec, axial, rot, mult, st, cur, q, r, bq, n):
     """r (n,) = R at the start of a step, sum mult f b_e(q) from the forces in st[cur] (the
-    rows at q where the kinematics are exact, rot >= 0)."""
+    rows at q where the kinematics are exact, rot != SMALL; bq: work space there)."""
     for i in range(n):
         r[i] = 0.0
     sn = 0.0
     cs = 1.0
+    rm = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
     if rot >= 0:
         sn = math.sin(q[rot])
         cs = math.cos(q[rot])
+    elif rot == SPATIAL:
+        rm = rotation(q[3], q[4], q[5])
     for e in range(bvec.shape[0]):
         mf = mult[e] * st[cur, e, 1]
+        if rot == SPATIAL:
+            element_row(bvec, axial, e, rm, q, bq)
+            for i in range(n):
+                r[i] += mf * bq[e, i]
+            continue
         for i in range(n):
             if i == rot:
                 r[i] += mf * (bvec[e, i] * cs - axial[e] * sn)

@@ -13,6 +13,11 @@ NOT_CONVERGED = 4  # Newton iterations failed even at the finest substep level
 #: retries the compute step with twice the substeps
 NEWTON_FAILED = -2
 
+# the kinematics a kernel runs (its argument ``rot``): a coordinate's index >= 0 is the plane
+# body's rotation with exact kinematics (rbhyst.model.kinematics)
+SMALL = -1  # the seed's rows, u_e = b_e . q
+SPATIAL = -2  # a body in space with exact kinematics: q[3:6] its rotation vector (rbhyst.model.rotations)
+
 # element state columns: displacement, force, branch sign, gap, tangent, antiderivative
 U, F, S, G, K, A = range(6)
 N_STATE = 6
