@@ -17,7 +17,7 @@ from rbhyst.solve.kernels import layout as kernels
 from rbhyst.errors import AnalysisError, InputError, byte_size
 from rbhyst.solve.history import Extremes, Layout, PlotData, Raw, body_spectrum_columns, estimate_columns
 from rbhyst.solve.kernels.layout import N_STATE, N_W, X_CUR, X_ITER, X_LEVEL_USED, X_OMEGA_DT2, X_STEPS, X_SUBSTEPS, n_x, x_slice
-from rbhyst.model.kinematics import SPATIAL, loads_at
+from rbhyst.model.kinematics import loads_at
 from rbhyst.model.system import System
 from rbhyst.solve.result import Result, RunStats
 from rbhyst.solve.static import at_rest_under_gravity
@@ -254,11 +254,7 @@ class _FixedStepPlan(Plan):
         if system.rotation_index >= 0:
             rows[:, system.rotation_index] = np.hypot(rows[:, system.rotation_index], self.axial)
         self.wgt = (rows * rows) @ self.minv
-        if system.rotation_index == SPATIAL:  # in space x' x R^T d' has a length of at most |x'|
-            from rbhyst.model.rotations import split_axial
-
-            x, _, _ = split_axial(self.axial, len(rows))
-            self.wgt = (rows[:, :3] ** 2) @ self.minv[:3] + np.einsum("ei,ei->e", x, x) * float(np.max(self.minv[3:]))
+        # (in space with exact rotations the loop rewrites it at every step from the rows it reached)
         ne = self.bvec.shape[0]
         self.layout = Layout(system, s.points)
         self.chunk = min(_chunk_rows(ne, system.n, len(self.layout.names), self.nsub), self.n_steps)

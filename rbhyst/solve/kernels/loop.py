@@ -37,7 +37,9 @@ def run_chunk(method, coef, mass, minv, cm, damped, bvec, axial, rot, mult, para
               x, st, st_save, kpeak, bq, w, wm, out_d, out_v, out_u, out_f, out_e, info):
     """Advance the state x, st over n_steps output steps of nsub_c compute steps of h_c each.
 
-    mass, minv: the diagonals of M and M^-1 as tuples of n (n is their length). axial, rot: the
+    mass, minv: the diagonals of M and M^-1 as tuples of n (n is their length). wgt (ne,): each
+    row's b^T M^-1 b for the stiffness monitor (a body in space with exact rotations rewrites it
+    at every step, its rows turning). axial, rot: the
     kinematics, bq (ne, n) work space for the rows b_e(q) (rbhyst.solve.kernels.elements.update_elements).
     load: (n_steps * nsub_c + 1, n) generalized load on the compute grid from the chunk's
     start time t0. Row k of out_* receives the state after output step k + 1. out_e columns:
@@ -112,6 +114,12 @@ def run_chunk(method, coef, mass, minv, cm, damped, bvec, axial, rot, mult, para
                         _fail(info, OVERFLOW if bad >= 0 else NONFINITE, bad, t_now)
                     return row
                 # resolution check on the stiffest instantaneous mode of the step
+                if rot == SPATIAL:  # the trace bound's weights b^T M^-1 b at the rows the step reached
+                    for e in range(ne):
+                        acc = 0.0
+                        for i in range(n):
+                            acc += bq[e, i] * bq[e, i] * minv[i]
+                        wgt[e] = acc
                 lam, worst = omega_squared(mult, kpeak, wgt)
                 if lam * h * h > limit2:
                     lam = omega_squared_exact(bq if rot != SMALL else bvec, mult, minv, kpeak, wm, w[W_Q])
