@@ -237,6 +237,11 @@ def run_study(system: System, settings: Settings, names: list[str] | None = None
 
     ``repeat``: runs shorter than REPEAT_BELOW_S are timed up to this many times (best kept).
     """
+    from rbhyst.solve.static import at_rest_under_gravity
+
+    # every solution starts at rest at the static equilibrium under gravity, as a run does (the
+    # runs find it themselves; the reference and the estimate's solution are given it here)
+    system = at_rest_under_gravity(system)
     names = check_integrators(list(names) if names is not None else fixed_step_names())
     duration = settings.duration if settings.duration is not None else system.excitation.duration
     if duration is None:
