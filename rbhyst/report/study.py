@@ -105,9 +105,9 @@ def plot_error_vs_dt(study: Study, path: Path) -> None:
 
 
 def _names(study: Study) -> str:
-    """The coordinates measured, as the axis label says them: u1, u2, θ3 (u1 ... θ3 in space)."""
+    """The coordinates measured, as the axis label says them: u1, u2, θ3 (the 6 coordinates in space)."""
     greek = [c.replace("theta", "θ") for c in study.coordinates]
-    return ", ".join(greek) if len(greek) <= 3 else f"{greek[0]} … {greek[-1]}"
+    return ", ".join(greek) if len(greek) <= 3 else f"the {len(greek)} coordinates"
 
 
 def _substep_legend(ax, study: Study) -> None:
