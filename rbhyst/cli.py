@@ -136,15 +136,6 @@ def modes(
         typer.echo(line)
 
 
-def plane_only(d, command: str, why: str) -> None:
-    """One error line where a command built for the plane gets a deck in space."""
-    from rbhyst.errors import InputError
-
-    if d.body is not None and d.body.dimensions == 3:
-        raise InputError(f"body: `rbhyst {command}` is built for a plane (2-D) deck ({why}); this deck is in space "
-                         "(3-D): see the README, Three dimensions")
-
-
 def run_line(result) -> str:
     """The console's one line on a run: method, steps, time, peak displacements and accelerations."""
     from rbhyst.model.deck import ACCEL_UNITS
@@ -361,7 +352,6 @@ def study(
 
     with user_errors():
         d = load_deck(deck)
-        plane_only(d, "study", "it measures u1, u2 and theta3")
         settings = settings_from_deck(d)
         names = _split_list(integrators, "--integrators")
         names = check_integrators(names if names is not None else fixed_step_names())
@@ -601,7 +591,8 @@ def spectrum(
 @app.command(cls=Command)
 def transmissibility(
     deck: Annotated[Path, typer.Argument(help="TOML or YAML deck (its excitation is replaced by the sine).")],
-    direction: Annotated[str, typer.Option(help="Direction of the support's sine: x1 or x2.")],
+    direction: Annotated[str, typer.Option(help="Direction of the support's sine: x1 or x2 (x1, x2 or x3, the "
+                                                "vertical, for a deck in space).")],
     amplitude: Annotated[str, typer.Option(help="Amplitude(s) of the support acceleration, comma-separated, "
                                                 "in --units.")],
     units: Annotated[str, typer.Option(help="Units of --amplitude: g or m/s2.")],
@@ -624,14 +615,14 @@ def transmissibility(
 
     from rbhyst.model.deck import ACCEL_UNITS, load_deck
     from rbhyst.files.outdir import staged_directory
-    from rbhyst.analyses.transmissibility import frequency_list, request_problems, stepped_sine, write_csv, write_json
+    from rbhyst.analyses.transmissibility import (directions, frequency_list, request_problems, stepped_sine, write_csv,
+                                                  write_json)
 
     with user_errors():
         d = load_deck(deck)
-        plane_only(d, "transmissibility", "its motion is along x1 or x2")
         amplitudes = _split_list(amplitude, "--amplitude", float)
         freqs = frequency_list(_split_list(frequencies, "--frequencies", float), f_from, f_to, count)
-        problems = request_problems(direction, amplitudes, freqs)  # (in the units given)
+        problems = request_problems(direction, amplitudes, freqs, directions(d))  # (in the units given)
         if units not in ("g", "m/s2"):
             problems.append(f"--units: {units!r}: g or m/s2")
         if problems:
@@ -787,14 +778,19 @@ MOTION_MARK = "# rbhyst make-motion"
 
 @app.command(cls=Command)
 def qualify(
-    deck: Annotated[Path, typer.Argument(help="TOML or YAML deck (x1 horizontal, x2 vertical), with a qualify "
-                                              "section or the options below.")],
+    deck: Annotated[Path, typer.Argument(help="TOML or YAML deck (x1 horizontal, x2 vertical; in space x1 and x2 "
+                                              "horizontal, x3 vertical), with a qualify section or the options "
+                                              "below.")],
     standard: Annotated[Optional[str], typer.Option(help="The required response spectrum: ac156 or ieee693.")] = None,
     sds: Annotated[Optional[float], typer.Option(help="AC156: S_DS, in g.")] = None,
     z_over_h: Annotated[Optional[float], typer.Option(help="AC156: z/h, 0 at grade to 1 at the roof.")] = None,
     level: Annotated[Optional[str], typer.Option(help="IEEE 693: the performance level, high or moderate.")] = None,
-    rrs: Annotated[Optional[str], typer.Option(help="A CSV RRS for x1 instead of a standard.")] = None,
-    rrs_x2: Annotated[Optional[str], typer.Option("--rrs-x2", help="A CSV RRS for x2.")] = None,
+    rrs: Annotated[Optional[str], typer.Option(help="A CSV RRS for x1 instead of a standard (in space: for x1 and "
+                                                    "x2).")] = None,
+    rrs_x2: Annotated[Optional[str], typer.Option("--rrs-x2", help="A CSV RRS for x2 (in space: for x2 alone, "
+                                                                   "instead of --rrs's).")] = None,
+    rrs_x3: Annotated[Optional[str], typer.Option("--rrs-x3", help="A CSV RRS for x3, the vertical of a deck in "
+                                                                   "space.")] = None,
     rrs_damping: Annotated[Optional[float], typer.Option(help="The damping ratio the RRS files are drawn for "
                                                               "(ieee693: 0.05 by default).")] = None,
     motions: Annotated[Optional[str], typer.Option(help="How many motions to make, or 'deck' (its own "
@@ -820,9 +816,8 @@ def qualify(
 
     with user_errors():
         d = load_deck(deck, need=ANALYSIS_SECTIONS)
-        plane_only(d, "qualify", "its motions and limits are along x1 and x2")
         req = request(d, {"standard": standard, "sds": sds, "z_over_h": z_over_h, "level": level, "rrs": rrs,
-                          "rrs_x2": rrs_x2,
+                          "rrs_x2": rrs_x2, "rrs_x3": rrs_x3,
                           "rrs_damping": rrs_damping, "motions": motions, "seed": seed, "duration": duration,
                           "motion_dt": motion_dt})
         target = out if out is not None else _sibling_dir(d, deck, "-qualify")
@@ -833,7 +828,7 @@ def qualify(
                 from rbhyst.report.qualification import plot_verdict
 
                 plot_verdict(v.checks, req.rrs, v.criteria, v.passed, tmp / "qualification.png",
-                             title=d.title or "", notes=v.heading)
+                             title=d.title or "", notes=v.heading, space="x3" in req.axes)
     for line in verdict_lines(v):
         say(line)
     say(f"wrote {target}")

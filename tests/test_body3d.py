@@ -342,13 +342,6 @@ def test_a_deck_mistake_in_space_is_one_line_naming_the_key(tmp_path, name, chan
     assert code == 2 and len(errors) == 1 and words in errors[0], out
 
 
-def test_commands_built_for_the_plane_refuse_a_deck_in_space(tmp_path):
-    code, out = invoke("study", str(DECKS / "cabinet_3d.toml"), "--out", str(tmp_path / "study"))
-    errors = [line for line in out.splitlines() if line.startswith("error:")]
-    assert code == 2 and len(errors) == 1 and "`rbhyst study` is built for a plane (2-D) deck" in errors[0], out
-    assert not (tmp_path / "study").exists()
-
-
 def test_a_body_of_parts_in_space_is_their_parallel_axis_sum():
     """Two boxes as [[body.parts]] (one given by its vertices) are the one box they make up; a
     vertex of the second part is found by part and vertex."""

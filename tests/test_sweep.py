@@ -272,7 +272,7 @@ def test_listed_cases_and_yaml(project):
 
 
 @pytest.mark.parametrize("change, lines", [
-    ({"motions": [{"name": "syn", **SYN, "x3": {}}]}, ["motions[1].x3: unknown key"]),
+    ({"motions": [{"name": "syn", **SYN, "x4": {}}]}, ["motions[1].x4: unknown key"]),
     ({"motions": [{"name": "syn", **SYN}, {"name": "syn", "x1": {"file": "records/synthetic_x1.csv",
                                                                   "units": "gee"}}]},
      ["motions[2].x1.units: Input should be 'g', 'm/s2' or 'cm/s2'"]),

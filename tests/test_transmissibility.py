@@ -183,7 +183,7 @@ def test_the_command_writes_csv_json_and_plot(tmp_path):
 
 @pytest.mark.parametrize("args, lines", [
     (["--direction", "x3", "--amplitude", "1,-1", "--units", "g", "--frequencies", "1,1,0"],
-     ["--direction: 'x3': x1 or x2", "--amplitude: -1 must be positive", "frequencies: 0 Hz must be positive",
+     ["--direction: 'x3': x1 or x2 (x3, the vertical, for a deck in space)", "--amplitude: -1 must be positive", "frequencies: 0 Hz must be positive",
       "frequencies: each frequency once"]),
     (["--direction", "x1", "--amplitude", "1", "--units", "cm/s2", "--frequencies", "1"],
      ["--units: 'cm/s2': g or m/s2"]),

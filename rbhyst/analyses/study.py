@@ -2,7 +2,8 @@
 
 ``run_study`` integrates the scene with each fixed-step integrator at each dt, times
 the time stepping alone (the kernel is compiled or loaded before the clock starts,
-best of a few repeats for short runs), and measures the error of u1, u2 and theta3
+best of a few repeats for short runs), and measures the error of every coordinate of the
+body (u1, u2 and theta3 in the plane; u1, u2, u3, theta1, theta2, theta3 in space)
 against one reference solution (:mod:`rbhyst.solve.integrators.reference`) as a relative
 max-norm, max_t |q - q_ref| / max_t |q_ref|. The observed order of each integrator is
 the least-squares slope of log error against log dt over its asymptotic range.
@@ -32,8 +33,17 @@ from rbhyst.solve.result import Result
 from rbhyst.solve.plan import Settings, grid, simulate
 
 COORDINATES = ("u1", "u2", "theta3")
-CSV_COLUMNS = ("integrator", "dt_s", "steps", "wall_s", "err_u1", "err_u2", "err_theta3", "err_max",
-               "est_max", "est_over_true")
+#: a body in space
+SPACE_COORDINATES = ("u1", "u2", "u3", "theta1", "theta2", "theta3")
+
+
+def csv_columns(coordinates: tuple[str, ...] = COORDINATES) -> tuple[str, ...]:
+    """study.csv's columns: an error column per coordinate of the body."""
+    return ("integrator", "dt_s", "steps", "wall_s", *(f"err_{c}" for c in coordinates), "err_max",
+            "est_max", "est_over_true")
+
+
+CSV_COLUMNS = csv_columns()
 #: default ladder: these multiples of the deck's dt
 LADDER = (4.0, 2.0, 1.0, 0.5, 0.25, 0.125)
 #: the asymptotic range of an order fit: errors below this (above it a method is still
@@ -56,7 +66,7 @@ class Run:
     dt: float
     steps: int = 0
     wall_s: float = math.nan
-    errors: tuple[float, float, float] = (math.nan, math.nan, math.nan)
+    errors: tuple[float, ...] = (math.nan, math.nan, math.nan)  # per coordinate (Study.coordinates)
     failed: str | None = None  # the analysis error, if it stopped
     substeps: int = 0  # extra substeps the stiffness monitor asked for
     max_substep_level: int = 0
@@ -89,6 +99,8 @@ class Study:
     reference: dict
     integrators: list[str] = field(default_factory=list)
     dts: list[float] = field(default_factory=list)
+    #: the body's coordinates, in the order of each run's errors
+    coordinates: tuple[str, ...] = COORDINATES
 
     def by_integrator(self) -> dict[str, list[Run]]:
         out: dict[str, list[Run]] = {}
@@ -105,7 +117,7 @@ class Study:
             "integrators": self.integrators,
             "dt_s": self.dts,
             "error": "relative max-norm per coordinate: max_t |q - q_ref| / max_t |q_ref| on the run's own "
-                     "time grid t_n = n dt; err_max is the largest of u1, u2, theta3",
+                     f"time grid t_n = n dt; err_max is the largest of {', '.join(self.coordinates)}",
             "estimate": "est_max: the error estimate an ordinary run reports (rbhyst.solve.estimate: against the adaptive "
                         f"solution at rtol {REFERENCE_RTOL:g}); est_over_true shows its honesty",
             "wall_s": "time stepping only (compiled kernel loaded beforehand), best of up to "
@@ -114,7 +126,7 @@ class Study:
             "reference": self.reference,
             "runs": [
                 {"integrator": r.integrator, "dt_s": r.dt, "steps": r.steps, "wall_s": _num(r.wall_s),
-                 "err_u1": _num(r.errors[0]), "err_u2": _num(r.errors[1]), "err_theta3": _num(r.errors[2]),
+                 **{f"err_{c}": _num(e) for c, e in zip(self.coordinates, r.errors)},
                  "err_max": _num(r.err_max), "est_max": _num(r.est_max), "est_over_true": _num(r.est_over_true),
                  "stiffness_substeps": r.substeps,
                  "max_substep_level": r.max_substep_level, "k0_substep_level": r.k0_substep_level,
@@ -225,6 +237,11 @@ def run_study(system: System, settings: Settings, names: list[str] | None = None
 
     ``repeat``: runs shorter than REPEAT_BELOW_S are timed up to this many times (best kept).
     """
+    from rbhyst.solve.static import at_rest_under_gravity
+
+    # every solution starts at rest at the static equilibrium under gravity, as a run does (the
+    # runs find it themselves; the reference and the estimate's solution are given it here)
+    system = at_rest_under_gravity(system)
     names = check_integrators(list(names) if names is not None else fixed_step_names())
     duration = settings.duration if settings.duration is not None else system.excitation.duration
     if duration is None:
@@ -251,11 +268,15 @@ def run_study(system: System, settings: Settings, names: list[str] | None = None
     done += 1
     tick(f"estimate's adaptive solution (rtol {REFERENCE_RTOL:g})")
     estimate_q = Estimator(system, times).solution(REFERENCE_RTOL).q
+    # the adaptive solution's q is the kernels': turned to the deck's axes and measured from the
+    # static equilibrium, as a run's table (and the reference's) gives it
+    estimate_q = system.to_deck(estimate_q - (system.static.q if system.static is not None else 0.0))
+    coordinates = tuple(c.key("d") for c in system.coordinates)
     runs = []
     for name in names:
         for dt in dts:
             tick(f"{name}, dt = {dt:g} s")
-            run = Run(name, dt, steps=steps[dt])
+            run = Run(name, dt, steps=steps[dt], errors=(math.nan,) * len(coordinates))
             try:
                 res = _timed(system, dataclasses.replace(base, integrator=name, dt=dt), repeat)
             except AnalysisError as err:
@@ -280,11 +301,11 @@ def run_study(system: System, settings: Settings, names: list[str] | None = None
         orders[name] = o
     ref_stats = dict(ref_stats, name="reference", order_fit_floor=floor)
     return Study(title=system.title, duration=duration, deck_dt=settings.dt, runs=runs, orders=orders,
-                 reference=ref_stats, integrators=names, dts=dts)
+                 reference=ref_stats, integrators=names, dts=dts, coordinates=coordinates)
 
 
 def write_csv(study: Study, path: Path) -> None:
-    lines = [",".join(CSV_COLUMNS)]
+    lines = [",".join(csv_columns(study.coordinates))]
     for r in study.runs:
         vals = r.row()
         cells = [vals[0], f"{vals[1]:.10g}", str(vals[2])]

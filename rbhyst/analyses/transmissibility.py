@@ -38,6 +38,13 @@ NEGLIGIBLE = 1e-6
 MAX_CYCLES = 128
 STEPS_PER_PERIOD = 100
 DIRECTIONS = ("x1", "x2")
+#: a deck in space: the support's sine along x1, x2 or x3 (vertical), T along all three
+SPACE_DIRECTIONS = ("x1", "x2", "x3")
+
+
+def directions(deck) -> tuple[str, ...]:
+    """The directions of the deck's body: x1, x2 in the plane; x1, x2, x3 in space."""
+    return SPACE_DIRECTIONS if deck.body is not None and deck.body.dimensions == 3 else DIRECTIONS
 
 
 @dataclass(frozen=True)
@@ -57,7 +64,7 @@ class SteadyState:
 @dataclass
 class Transmissibility:
     direction: str
-    columns: list[str]  # T_G_x1, T_G_x2, T_<point>_x1, ...
+    columns: list[str]  # T_G_x1, T_G_x2 (T_G_x3 in space), T_<point>_x1, ...
     runs: list[SteadyState] = field(default_factory=list)
 
     @property
@@ -85,14 +92,17 @@ class Transmissibility:
 
 def t_columns(deck) -> list[str]:
     names = ["G", *(p.name for p in deck.output.points or ())]
-    return [f"T_{n}_{d}" for n in names for d in DIRECTIONS]
+    return [f"T_{n}_{d}" for n in names for d in directions(deck)]
 
 
-def request_problems(direction: str, amplitudes, frequencies) -> list[str]:
-    """One line per problem with the sweep asked for (amplitudes in any one unit)."""
+def request_problems(direction: str, amplitudes, frequencies, axes: tuple[str, ...] = DIRECTIONS) -> list[str]:
+    """One line per problem with the sweep asked for (amplitudes in any one unit); ``axes``: the
+    deck's directions (:func:`directions`)."""
     problems = []
-    if direction not in DIRECTIONS:
-        problems.append(f"--direction: {direction!r}: x1 or x2")
+    if direction not in axes:
+        said = "x1 or x2" if axes == DIRECTIONS else "x1, x2 or x3"
+        tail = " (x3, the vertical, for a deck in space)" if direction == "x3" and axes == DIRECTIONS else ""
+        problems.append(f"--direction: {direction!r}: {said}{tail}")
     if not amplitudes:
         problems.append("--amplitude: at least one amplitude")
     problems += [f"--amplitude: {a:g} must be positive" for a in amplitudes if not (a > 0 and math.isfinite(a))]
@@ -203,7 +213,7 @@ def stepped_sine(deck, direction: str, amplitudes, frequencies, workers: int = 1
 
     check_runnable(deck)
     amplitudes, frequencies = [float(a) for a in amplitudes], [float(f) for f in frequencies]
-    problems = request_problems(direction, amplitudes, frequencies)
+    problems = request_problems(direction, amplitudes, frequencies, directions(deck))
     if problems:
         raise InputError(problems)
     data = deck.model_dump(mode="python", exclude_unset=True)

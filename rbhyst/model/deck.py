@@ -547,8 +547,9 @@ class Qualify(_Model):
     sds: PosFloat | None = None  # g, with standard = "ac156"
     z_over_h: Annotated[float, Field(ge=0, le=1)] | None = None
     level: Literal["high", "moderate"] | None = None  # with standard = "ieee693": its performance level
-    rrs: str | None = None  # a CSV RRS for x1 (horizontal), instead of a standard
-    rrs_x2: str | None = None  # ... and for x2 (vertical)
+    rrs: str | None = None  # a CSV RRS for x1 (horizontal; in space x1 and x2), instead of a standard
+    rrs_x2: str | None = None  # ... and for x2 (vertical; in space the second horizontal, when not rrs's)
+    rrs_x3: str | None = None  # ... and for x3 (in space: the vertical)
     rrs_damping: Ratio | None = None
     #: how many motions to make, or "deck": the deck's own excitation.support
     motions: Annotated[int, Field(ge=1)] | Literal["deck"] = 1
@@ -556,8 +557,9 @@ class Qualify(_Model):
     duration: PosFloat = 30.0  # s, of each motion made
     motion_dt: PosFloat = 0.005  # s, their sample step
     #: peak total acceleration allowed at a point of interest ("G": the mass centre), g: one
-    #: number for both directions or [x1, x2]
-    acceleration_limit_g: dict[str, PosFloat | Annotated[list[PosFloat], Field(min_length=2, max_length=2)]] | None \
+    #: number for every direction or [x1, x2] ([x1, x2, x3] in space: the count is checked
+    #: against the deck's by rbhyst qualify)
+    acceleration_limit_g: dict[str, PosFloat | Annotated[list[PosFloat], Field(min_length=2, max_length=3)]] | None \
         = None
     #: the force each element can take, N: one number for all, or by CSV name (e1, e2, ...)
     force_capacity_N: PosFloat | dict[str, PosFloat] | None = None

@@ -12,9 +12,11 @@ from ._style import save, styled, subplots
 
 G_STANDARD = 9.80665
 AXIS_NAMES = {"x1": "x1 (horizontal)", "x2": "x2 (vertical)"}
+#: a deck in space: x1 and x2 horizontal, x3 vertical
+SPACE_AXIS_NAMES = {"x1": "x1 (horizontal)", "x2": "x2 (horizontal)", "x3": "x3 (vertical)"}
 
 
-def _trs_panel(ax, axis: str, rrs, checks: list[tuple[str, object]]) -> None:
+def _trs_panel(ax, axis: str, rrs, checks: list[tuple[str, object]], names: dict = AXIS_NAMES) -> None:
     """RRS (black), its band over the checked range (shaded), each motion's TRS (colour, a dot
     at every checked frequency, red where outside the band)."""
     lo, hi = rrs.check_range
@@ -41,7 +43,7 @@ def _trs_panel(ax, axis: str, rrs, checks: list[tuple[str, object]]) -> None:
     ax.tick_params(which="minor", labelsize=7)
     ax.set_xlabel("frequency [Hz]")
     ax.set_ylabel("spectral acceleration [g]")
-    ax.set_title(f"{AXIS_NAMES.get(axis, axis)}: {rrs.name}", fontsize=8)
+    ax.set_title(f"{names.get(axis, axis)}: {rrs.name}", fontsize=8)
     ax.grid(True, which="both", alpha=0.25)
     ax.legend(fontsize=7, loc="lower center")
 
@@ -50,10 +52,11 @@ def _trs_panel(ax, axis: str, rrs, checks: list[tuple[str, object]]) -> None:
 def plot_trs(motions, rrs: dict, path: Path, title: str = "") -> None:
     """One panel per axis: the RRS, its band and every motion's TRS."""
     axes_names = list(rrs)
+    names = SPACE_AXIS_NAMES if "x3" in rrs else AXIS_NAMES
     fig, axes = subplots(1, len(axes_names), figsize=(5.4 * len(axes_names), 4.4), squeeze=False)
     for ax, axis in zip(axes.flat, axes_names):
         _trs_panel(ax, axis, rrs[axis], [(f"TRS, motion {m.number}", m.records[axis].check) for m in motions
-                                         if axis in m.records])
+                                         if axis in m.records], names)
     fig.suptitle("Test response spectra (TRS) against the required (RRS)" + (f": {title}" if title else ""),
                  fontsize=9)
     save(fig, path)
@@ -61,15 +64,17 @@ def plot_trs(motions, rrs: dict, path: Path, title: str = "") -> None:
 
 @styled
 def plot_verdict(checks: dict, rrs: dict, criteria: list[dict], passed: bool, path: Path, title: str = "",
-                 notes: tuple[str, ...] = ()) -> None:
+                 notes: tuple[str, ...] = (), space: bool = False) -> None:
     """TRS against RRS per axis (top), and every criterion's demand / capacity as a bar (bottom):
-    green within its capacity, red beyond, the capacity at 1."""
+    green within its capacity, red beyond, the capacity at 1. ``space``: the deck is in space
+    (x2 horizontal, x3 vertical)."""
+    names = SPACE_AXIS_NAMES if space else AXIS_NAMES
     n_axes = max(1, len(rrs))
     n_crit = max(1, len(criteria))
     fig = _figure(n_axes, n_crit)
     grid = fig.add_gridspec(2, n_axes, height_ratios=[4.4, 0.9 + 0.28 * n_crit])
     for k, axis in enumerate(rrs):
-        _trs_panel(fig.add_subplot(grid[0, k]), axis, rrs[axis], checks.get(axis, []))
+        _trs_panel(fig.add_subplot(grid[0, k]), axis, rrs[axis], checks.get(axis, []), names)
     ax = fig.add_subplot(grid[1, :])
     labels = [c["label"] for c in criteria]
     use = np.array([c["demand"] / c["capacity"] for c in criteria]) if criteria else np.zeros(0)

@@ -54,7 +54,7 @@ def plot_error_vs_runtime(study: Study, path: Path) -> None:
     ax.annotate("reference", (study.reference["wall_s"], 0.02), xycoords=("data", "axes fraction"),
                 rotation=90, fontsize=7, color="0.3", xytext=(3, 0), textcoords="offset points")
     ax.set_xlabel("wall time of the time stepping [s]")
-    ax.set_ylabel("error: max over u1, u2, θ3 of max|q − q_ref| / max|q_ref|")
+    ax.set_ylabel(f"error: max over {_names(study)} of max|q − q_ref| / max|q_ref|")
     ax.set_title(f"Error against run time{': ' + study.title if study.title else ''}\n"
                  f"{study.duration:g} s of motion; {_reference_note(study)}", fontsize=8.5)
     _substep_legend(ax, study)
@@ -95,13 +95,19 @@ def plot_error_vs_dt(study: Study, path: Path) -> None:
     ax.set_xticklabels([_dt_label(dt) for dt in sorted(study.dts)])
     ax.xaxis.set_minor_formatter(NullFormatter())
     ax.set_xlabel("dt")
-    ax.set_ylabel("error: max over u1, u2, θ3 of max|q − q_ref| / max|q_ref|")
+    ax.set_ylabel(f"error: max over {_names(study)} of max|q − q_ref| / max|q_ref|")
     ax.set_title(f"Error against time step{': ' + study.title if study.title else ''}\n"
                  f"order: slope over the asymptotic range; {_reference_note(study)}", fontsize=8.5)
     ax.plot([], [], marker="s", ms=9, mfc="none", color="0.4", lw=0, label="each run's own error estimate")
     _substep_legend(ax, study)
     ax.legend(fontsize=7.5, loc="upper left")
     save(fig, path)
+
+
+def _names(study: Study) -> str:
+    """The coordinates measured, as the axis label says them: u1, u2, θ3 (the 6 coordinates in space)."""
+    greek = [c.replace("theta", "θ") for c in study.coordinates]
+    return ", ".join(greek) if len(greek) <= 3 else f"the {len(greek)} coordinates"
 
 
 def _substep_legend(ax, study: Study) -> None:

@@ -15,7 +15,8 @@ SHOWN_ABOVE = 1e-6
 
 @styled
 def plot_transmissibility(result, path: Path, title: str = ""):
-    """log-log T with plain tick labels; along the excitation solid, across it dashed; T = 1
+    """log-log T with plain tick labels; along the excitation solid, across it dashed (in space
+    the second direction across dash-dotted); T = 1
     marked. Returns the figure (saved to ``path``)."""
     table = result.table()
     locations = list(dict.fromkeys(c[2:-3] for c in result.columns))
@@ -23,12 +24,14 @@ def plot_transmissibility(result, path: Path, title: str = ""):
     cols = min(len(locations), 2)
     rows = -(-len(locations) // cols)
     fig, axes = subplots(rows, cols, figsize=(5.4 * cols, 4.2 * rows), squeeze=False)
-    across = "x2" if result.direction == "x1" else "x1"
+    # the other directions of the body (x2 or x1 in the plane; two of x1, x2, x3 in space)
+    across = [d for d in dict.fromkeys(c[-2:] for c in result.columns) if d != result.direction]
+    styles = [(result.direction, "-"), *zip(across, ("--", "-."))]
     for ax, loc in zip(axes.flat, locations):
         for i, amp in enumerate(amplitudes):
             mine = table[table[:, 1] == amp]
             f = mine[:, 0]
-            for direction, style in ((result.direction, "-"), (across, "--")):
+            for direction, style in styles:
                 t = mine[:, 2 + result.columns.index(f"T_{loc}_{direction}")].copy()
                 t[t < SHOWN_ABOVE] = np.nan
                 if np.isnan(t).all():

@@ -278,14 +278,36 @@ def read_rrs(path: Path, damping: float | None, name: str = "", damping_key: str
                (float(curve.x[0]), float(curve.x[-1])), AC156_BAND, str(path.name))
 
 
+#: the axes of a deck in the plane (x1 horizontal, x2 vertical) and in space (x1, x2
+#: horizontal, x3 vertical): what each is
+PLANE_AXES = {"x1": "horizontal", "x2": "vertical"}
+SPACE_AXES = {"x1": "horizontal", "x2": "horizontal", "x3": "vertical"}
+
+
+def in_space(rrs: dict[str, RRS]) -> dict[str, RRS]:
+    """A standard's RRS for a deck in space: its horizontal (x1) for x1 and x2, its vertical
+    (x2 in the plane) for x3."""
+    return {"x1": rrs["x1"], "x2": rrs["x1"], "x3": rrs["x2"]}
+
+
 def requested_rrs(rrs: str | None, rrs_x2: str | None, damping: float | None, sds: float | None,
                   z_over_h: float | None, base: Path, keys: dict[str, str],
-                  level: str | None = None) -> tuple[dict[str, RRS], str | None]:
+                  level: str | None = None, rrs_x3: str | None = None,
+                  space: bool = False) -> tuple[dict[str, RRS], str | None]:
     """The RRS per axis a command asks for, and the standard's name (None for files): ``rrs`` a
     standard's name or the x1 (horizontal) RRS file, ``rrs_x2`` the vertical one's file.
-    ``keys`` names the options (or deck keys) in messages: rrs, rrs_x2, damping, sds, z_over_h,
-    level (``level``: IEEE 693's, high or moderate)."""
+    ``keys`` names the options (or deck keys) in messages: rrs, rrs_x2, rrs_x3, damping, sds,
+    z_over_h, level (``level``: IEEE 693's, high or moderate).
+
+    ``space``: for a deck in space, whose x1 and x2 are horizontal and x3 vertical: a standard
+    gives its horizontal RRS to x1 and x2 and its vertical to x3; a file ``rrs`` is the RRS of
+    x1 and of x2 (``rrs_x2``, when given, of x2 alone), ``rrs_x3`` the vertical's."""
     level_key = keys.get("level", "--level")
+    x3_key = keys.get("rrs_x3", "--rrs-x3")
+    if rrs_x3 is not None and not space:
+        x2_key = "--rrs-x2" if x3_key.startswith("--") else keys["rrs_x2"]  # (as the user gave x3)
+        raise InputError(f"{x3_key}: the deck is in the plane (2-D), whose vertical is x2: "
+                         f"{x2_key} gives its RRS (x3 is the vertical of a deck in space)")
     if rrs is None:
         raise InputError(f"{keys['rrs']}: required: {', '.join(STANDARDS)} or an RRS file (frequency_hz,sa_g)")
     standard = rrs.lower()
@@ -293,31 +315,35 @@ def requested_rrs(rrs: str | None, rrs_x2: str | None, damping: float | None, sd
         problems = ac156_problems(sds, z_over_h, keys["sds"], keys["z_over_h"])
         problems += [f"{keys[k]}: not with {keys['rrs']} {rrs}: the standard gives it" for k, v in
                      (("rrs_x2", rrs_x2), ("damping", damping)) if v is not None]
+        problems += [f"{x3_key}: not with {keys['rrs']} {rrs}: the standard gives it"] if rrs_x3 is not None else []
         problems += [f"{level_key}: only with {keys['rrs']} ieee693"] if level is not None else []
         if problems:
             raise InputError(problems)
-        return ac156(sds, z_over_h), standard
+        out = ac156(sds, z_over_h)
+        return (in_space(out) if space else out), standard
     if standard == "ieee693":
         problems = ieee693_problems(level, damping, level_key, keys["damping"])
-        problems += [f"{keys['rrs_x2']}: not with {keys['rrs']} {rrs}: the standard gives it"] \
-            if rrs_x2 is not None else []
+        problems += [f"{key}: not with {keys['rrs']} {rrs}: the standard gives it"
+                     for key, v in ((keys['rrs_x2'], rrs_x2), (x3_key, rrs_x3)) if v is not None]
         problems += [f"{keys[k]}: only with {keys['rrs']} ac156" for k, v in
                      (("sds", sds), ("z_over_h", z_over_h)) if v is not None]
         if problems:
             raise InputError(problems)
-        return ieee693(level, damping), standard
+        out = ieee693(level, damping)
+        return (in_space(out) if space else out), standard
     problems = [f"{keys[k]}: only with {keys['rrs']} ac156" for k, v in
                 (("sds", sds), ("z_over_h", z_over_h)) if v is not None]
     problems += [f"{level_key}: only with {keys['rrs']} ieee693"] if level is not None else []
     out = {}
-    for axis, name in (("x1", rrs), ("x2", rrs_x2)):
+    files = (("x1", rrs), ("x2", rrs_x2 if rrs_x2 is not None or not space else rrs), ("x3", rrs_x3))
+    for axis, name in files:
         if name is None:
             continue
         path = Path(name) if Path(name).is_absolute() else base / name
         try:
             out[axis] = read_rrs(path, damping, f"{Path(name).stem} ({axis})", keys["damping"])
         except InputError as err:
-            problems += [p for p in err.problems if p not in problems]
+            problems += [p for p in err.problems if p not in problems]  # (x1, x2 may read one file)
     if problems:
         raise InputError(problems)
     return out, None

@@ -1,7 +1,8 @@
 """The verdict of a deck against a required response spectrum: ``rbhyst qualify``.
 
 The motions are made (spectrum-compatible, rbhyst.analyses.qualification.matching) or taken
-from the deck, their TRS checked, the deck run once per motion (x1 horizontal, x2 vertical) and
+from the deck, their TRS checked, the deck run once per motion (x1 horizontal, x2 vertical; a
+deck in space: x1 and x2 horizontal, x3 vertical) and
 every criterion the deck gives compared with its capacity: each element's stroke, the peak total
 acceleration at G and at each point of interest against the equipment's limit, each element's
 force against its capacity. The demand is the run's own figure (summary.json's peaks and
@@ -21,12 +22,12 @@ from pathlib import Path
 import numpy as np
 
 from rbhyst.analyses.qualification import matching
-from rbhyst.analyses.qualification.rrs import STANDARDS, G, RRS, requested_rrs
+from rbhyst.analyses.qualification.rrs import PLANE_AXES, SPACE_AXES, STANDARDS, G, RRS, requested_rrs
 from rbhyst.errors import InputError
 
 #: from this many motions on the demand is the mean over them, below it the largest (ASCE 7-10 16.2.4)
 MEAN_FROM = 7
-_SPECTRUM_KEYS = ("standard", "sds", "z_over_h", "level", "rrs", "rrs_x2", "rrs_damping")
+_SPECTRUM_KEYS = ("standard", "sds", "z_over_h", "level", "rrs", "rrs_x2", "rrs_x3", "rrs_damping")
 
 
 @dataclass
@@ -41,6 +42,13 @@ class Request:
     motion_dt: float
     acceleration_limit_g: dict
     force_capacity_N: float | dict | None
+    #: what each axis of the deck is: x1 horizontal, x2 vertical (PLANE_AXES); in space x1 and
+    #: x2 horizontal, x3 vertical (SPACE_AXES)
+    axes: dict = field(default_factory=lambda: dict(PLANE_AXES))
+
+    @property
+    def vertical(self) -> str:
+        return next(a for a, what in self.axes.items() if what == "vertical")
 
 
 def request(deck, cli: dict) -> Request:
@@ -49,13 +57,15 @@ def request(deck, cli: dict) -> Request:
     or the deck key they come from, all at once."""
     given = deck.qualify.model_dump(exclude_unset=True) if deck.qualify is not None else {}
     cli = {k: v for k, v in cli.items() if v is not None}
-    for k in ("rrs", "rrs_x2"):  # files named on the command line are where the command runs
+    space = deck.body is not None and deck.body.dimensions == 3
+    for k in ("rrs", "rrs_x2", "rrs_x3"):  # files named on the command line are where the command runs
         if k in cli and cli[k].lower() not in STANDARDS:
             cli[k] = str(Path(cli[k]).resolve())
     if "standard" in cli or "rrs" in cli:
         given = {k: v for k, v in given.items() if k not in _SPECTRUM_KEYS}
     values = {**given, **cli}
-    option = {"standard": "--standard", "rrs": "--rrs", "rrs_x2": "--rrs-x2", "rrs_damping": "--rrs-damping",
+    option = {"standard": "--standard", "rrs": "--rrs", "rrs_x2": "--rrs-x2", "rrs_x3": "--rrs-x3",
+              "rrs_damping": "--rrs-damping",
               "sds": "--sds", "z_over_h": "--z-over-h", "level": "--level", "motions": "--motions",
               "duration": "--duration",
               "motion_dt": "--motion-dt", "seed": "--seed"}
@@ -80,26 +90,31 @@ def request(deck, cli: dict) -> Request:
     rrs, standard = {}, None
     if not problems:
         spec_keys = {"rrs": keys["standard"] if "standard" in values else keys["rrs"], "rrs_x2": keys["rrs_x2"],
-                     "damping": keys["rrs_damping"], "sds": keys["sds"], "z_over_h": keys["z_over_h"],
+                     "rrs_x3": keys["rrs_x3"], "damping": keys["rrs_damping"], "sds": keys["sds"], "z_over_h": keys["z_over_h"],
                      "level": keys["level"], "duration": keys["duration"], "dt": keys["motion_dt"]}
         try:
             rrs, standard = requested_rrs(values.get("standard", values.get("rrs")), values.get("rrs_x2"),
                                           values.get("rrs_damping"), values.get("sds"), values.get("z_over_h"),
-                                          deck.base, spec_keys, values.get("level"))
+                                          deck.base, spec_keys, values.get("level"), values.get("rrs_x3"), space)
         except InputError as err:
             problems += err.problems
         if rrs and motions != "deck":
             problems += matching.motion_problems(rrs, values.get("duration", 30.0), values.get("motion_dt", 0.005),
                                                  None, standard, spec_keys)
-    problems += _limit_problems(deck, values)
-    if deck.body is not None and deck.body.gravity is not None and abs(deck.body.gravity[0]) > abs(deck.body.gravity[1]):
+    problems += _limit_problems(deck, values, space)
+    gravity = deck.body.gravity if deck.body is not None else None
+    if gravity is not None and not space and abs(gravity[0]) > abs(gravity[1]):
         problems.append("body.gravity: acts along x1, but qualification takes x1 as horizontal and x2 as vertical "
                         "(the vertical spectrum drives x2)")
+    if gravity is not None and space and abs(gravity[2]) < max(abs(gravity[0]), abs(gravity[1])):
+        along = "x1" if abs(gravity[0]) >= abs(gravity[1]) else "x2"
+        problems.append(f"body.gravity: acts along {along}, but qualification takes x1 and x2 as horizontal and x3 "
+                        "as vertical in space (the vertical spectrum drives x3)")
     if problems:
         raise InputError(problems)
     return Request(rrs, standard, motions, int(values.get("seed", 1)), float(values.get("duration", 30.0)),
                    float(values.get("motion_dt", 0.005)), values.get("acceleration_limit_g") or {},
-                   values.get("force_capacity_N"))
+                   values.get("force_capacity_N"), dict(SPACE_AXES if space else PLANE_AXES))
 
 
 def output_files(req: Request) -> list[str]:
@@ -111,13 +126,18 @@ def output_files(req: Request) -> list[str]:
     return files
 
 
-def _limit_problems(deck, values: dict) -> list[str]:
+def _limit_problems(deck, values: dict, space: bool = False) -> list[str]:
     problems = []
     names = [p.name for p in deck.output.points or []]
-    for name in values.get("acceleration_limit_g") or {}:
+    for name, limit in (values.get("acceleration_limit_g") or {}).items():
         if name != "G" and name not in names:
             problems.append(f"qualify.acceleration_limit_g.{name}: no point {name!r} in output.points "
                             f"({', '.join(names + ['G (the mass centre)'])})")
+        n = 3 if space else 2
+        if isinstance(limit, list) and len(limit) != n:
+            said = "[x1, x2, x3] (the deck is in space)" if space else "[x1, x2] (the deck is in the plane)"
+            problems.append(f"qualify.acceleration_limit_g.{name}: {len(limit)} values: one number for every "
+                            f"direction or {said}")
     caps = values.get("force_capacity_N")
     n_el = sum(el.count for el in deck.elements or [])
     if isinstance(caps, dict):
@@ -205,7 +225,8 @@ def qualify(deck, req: Request, folder: Path, integrator: str | None = None, dt:
                              "trs": {axis: c.summary() for axis, c in own.items()}})
         decks = [("deck", _deck_with_motion(deck, None))]
     else:
-        made = matching.make_motions(req.rrs, req.motions, req.duration, req.motion_dt, req.seed)
+        made = matching.make_motions(req.rrs, req.motions, req.duration, req.motion_dt, req.seed,
+                                     vertical=req.vertical)
         (folder / "motions").mkdir()
         mark = f"# rbhyst qualify {deck.source.name if deck.source else 'deck'}"
         decks = []
@@ -243,7 +264,7 @@ def qualify(deck, req: Request, folder: Path, integrator: str | None = None, dt:
         "pass": passed,
         "standard": req.standard,
         "rrs": {axis: r.describe() for axis, r in req.rrs.items()},
-        "axes": {"x1": "horizontal", "x2": "vertical"},
+        "axes": dict(req.axes),
         "motions": motion_facts,
         "statistic": (f"the mean over the {n} motions (seven or more: ASCE 7-10 16.2.4)" if n >= MEAN_FROM else
                       f"the largest over the {n} motion{'s' * (n != 1)} (fewer than seven: ASCE 7-10 16.2.4)"),
@@ -276,7 +297,7 @@ def _deck_trs(excitation, duration: float, rrs: dict[str, RRS]) -> dict:
 
     out = {}
     for axis, r in rrs.items():
-        signal = excitation.ag1 if axis == "x1" else excitation.ag2
+        signal = getattr(excitation, "ag" + axis[1:])
         f = sixth_octave(*r.check_range)
         if signal is None:
             out[axis] = matching.Check(f, r(f), np.zeros(len(f)), r.band, 0.0, r.peak_min)
@@ -284,7 +305,7 @@ def _deck_trs(excitation, duration: float, rrs: dict[str, RRS]) -> dict:
         periods = np.sort(1.0 / f)
         step = getattr(signal, "dt", periods[0] / 20.0)
         t_end = max(duration, signal.end or duration) + rest_samples(periods, [r.damping], step) * step
-        sa = ground_spectra(type(excitation)(**{("ag1" if axis == "x1" else "ag2"): signal}), t_end, [r.damping],
+        sa = ground_spectra(type(excitation)(**{"ag" + axis[1:]: signal}), t_end, [r.damping],
                             periods).spectrum.sa[:, 0, 0]
         peak = 0.0  # the signal's peak acceleration, over its samples and the values it jumps to
         for _, values, jump in signal_chunks(signal, t_end, periods[-1]):
@@ -325,9 +346,10 @@ def _criteria(deck, req: Request, summaries: list[dict]) -> list[dict]:
                                   f"stroke elements[{i}] ({span})",
                                   utilization=[float(u) for u in use], column=f"e{first}_u_m"))
         first += el.count
+    directions = list(req.axes)  # x1, x2 (and x3 in space)
     for name, limit in (req.acceleration_limit_g or {}).items():
-        limits = limit if isinstance(limit, list) else [limit, limit]
-        for j, direction in enumerate(("x1", "x2")):
+        limits = limit if isinstance(limit, list) else [limit] * len(directions)
+        for j, direction in enumerate(directions):
             column = f"at{j + 1}_m_s2" if name == "G" else f"{name}_at{j + 1}_m_s2"
             per_run = [s["peaks"][column] / G for s in summaries]
             out.append(_criterion("acceleration", f"{name} {direction}", "g", per_run, float(limits[j]),

@@ -97,11 +97,15 @@ def load_sweep(path: str | Path) -> Sweep:
             from None
     base = _base_deck(deck)
     deck = base.deck()
+    if deck.body is None or deck.body.dimensions == 2:
+        vertical = [f"motions[{i}].x3" for i, m in enumerate(spec.motions or [], start=1) if m.x3 is not None]
+        vertical += [f"motion_folders[{i}].x3" for i, f in enumerate(spec.motion_folders or [], start=1)
+                     if f.x3 is not None]
+        if vertical:
+            raise InputError([f"{key}: the deck {spec.deck} is in the plane (2-D): support motion along x1 and x2 "
+                              "only (x3 is for a deck in space)" for key in vertical])
     motions = sweep_motions(spec, here)
     own = not motions
-    if not own and deck.body is not None and deck.body.dimensions == 3:
-        raise InputError(f"motions: the deck {spec.deck} is in space (3-D) and [[motions]] give x1 and x2 only "
-                         "(its x3 motion would be dropped): sweep its own motion with [scale] and [vary]")
     if own:
         motions = [SweepMotion(DECK_MOTION, deck_support(deck), "deck")]
     kind = spec.scale.kind if spec.scale is not None else "factors"

@@ -18,7 +18,11 @@ from rbhyst.analyses.sweep.spec import MotionFolder, SweepSpec
 #: the name of the deck's own support motion when the sweep lists none
 DECK_MOTION = "deck"
 
-SIGNAL_KEYS = (("support", "x1"), ("support", "x2"), ("force", "p1"), ("force", "p2"), ("force", "m3"))
+#: every signal a deck may give (x3, p3, m1 and m2 in space), whose files a case's key names by content
+SIGNAL_KEYS = (("support", "x1"), ("support", "x2"), ("force", "p1"), ("force", "p2"), ("force", "m3"),
+               ("support", "x3"), ("force", "p3"), ("force", "m1"), ("force", "m2"))
+#: the support's components
+AXES = ("x1", "x2", "x3")
 
 
 @dataclass(frozen=True)
@@ -68,7 +72,7 @@ def folder_motions(f: MotionFolder, sweep_dir: Path, where: str) -> list[SweepMo
         raise InputError(f"{where}.folder: {folder}: no such folder")
     names = sorted(p.name for p in folder.iterdir() if p.is_file())
     found = {c: {stem: n for n in names if (stem := _match(pattern, n)) is not None}
-             for c, pattern in (("x1", f.x1), ("x2", f.x2)) if pattern is not None}
+             for c, pattern in ((c, getattr(f, c)) for c in AXES) if pattern is not None}
     problems = []
     comps = list(found)
     for c in comps:
@@ -136,7 +140,7 @@ def peak_acceleration(support: dict) -> float:
     from rbhyst.model.records import read_record
 
     peak = 0.0
-    for c in ("x1", "x2"):
+    for c in AXES:
         comp = support.get(c)
         if comp is None:
             continue

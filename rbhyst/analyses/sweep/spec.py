@@ -12,36 +12,40 @@ from typing import Annotated, Any, Literal
 
 from pydantic import Field, ValidationError, field_validator, model_validator
 
-from rbhyst.model.deck import AccelUnits, PlaneSupport, PosFloat, _key_problems, _messages, _Model, read_mapping
+from rbhyst.model.deck import AccelUnits, PosFloat, Support, _key_problems, _messages, _Model, read_mapping
 from rbhyst.errors import InputError
 
 Name = Annotated[str, Field(min_length=1, pattern=r"^[^\x00-\x1f\x7f]+$")]
 
 
-class Motion(PlaneSupport):
-    """One support motion: it replaces the deck's ``excitation.support`` (x1, x2 as there)."""
+class Motion(Support):
+    """One support motion: it replaces the deck's ``excitation.support`` (x1, x2 as there, and x3
+    for a deck in space)."""
 
     name: Name
 
     @model_validator(mode="after")
     def _some_component(self):
-        if self.x1 is None and self.x2 is None:
-            raise ValueError("give x1, x2 or both (signals as in the deck's excitation.support)")
+        if self.x1 is None and self.x2 is None and self.x3 is None:
+            raise ValueError("give x1, x2 or both (and x3 for a deck in space: signals as in the deck's "
+                             "excitation.support)")
         return self
 
 
 class MotionFolder(_Model):
     """Every record of a folder whose name matches ``x1`` (one ``*``), paired with the file
-    matching ``x2`` where the ``*`` stands for the same text; that text names the motion."""
+    matching ``x2`` (and ``x3``, for a deck in space) where the ``*`` stands for the same text;
+    that text names the motion."""
 
     folder: str
     x1: str | None = None
     x2: str | None = None
+    x3: str | None = None  # for a deck in space
     units: AccelUnits
     scale: float = 1.0
     dt: PosFloat | None = None
 
-    @field_validator("x1", "x2")
+    @field_validator("x1", "x2", "x3")
     @classmethod
     def _one_star(cls, v: str | None) -> str | None:
         if v is None:
@@ -54,8 +58,8 @@ class MotionFolder(_Model):
 
     @model_validator(mode="after")
     def _some_component(self):
-        if self.x1 is None and self.x2 is None:
-            raise ValueError("give the pattern of x1, x2 or both")
+        if self.x1 is None and self.x2 is None and self.x3 is None:
+            raise ValueError("give the pattern of x1, x2 or both (and x3 for a deck in space)")
         return self
 
 
