@@ -69,7 +69,7 @@ def test_an_empty_deck_names_every_missing_section(tmp_path):
     code, err = invoke("run", deck)
     assert code == 2
     assert err.splitlines() == ["error: hysteresis: required key is missing", "error: body: required for an analysis",
-                                "error: elements: required for an analysis",
+                                "error: elements: required for an analysis ([[elements]] or [[isolators]])",
                                 "error: analysis: required for an analysis"]
     assert not (tmp_path / "results").exists()
 

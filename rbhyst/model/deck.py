@@ -207,16 +207,37 @@ class _Placed(_Model):
 
     @model_validator(mode="after")
     def _one_place(self):
-        if (self.vertex is None) == (self.point is None):
-            raise ValueError("give exactly one of `vertex` (1-based index) or `point` ([x1, x2] in m)")
-        if self.part is not None and self.vertex is None:
-            raise _key_problems([("part", "goes with `vertex` (that part's vertex); a `point` is in the "
-                                          "deck's frame whichever part it lies on")])
-        return self
+        return _one_place(self)
+
+
+def _one_place(entry):
+    """An element, damper or isolator is at exactly one vertex or point; ``part`` names a vertex's part."""
+    if (entry.vertex is None) == (entry.point is None):
+        raise ValueError("give exactly one of `vertex` (1-based index) or `point` ([x1, x2] in m)")
+    if entry.part is not None and entry.vertex is None:
+        raise _key_problems([("part", "goes with `vertex` (that part's vertex); a `point` is in the "
+                                      "deck's frame whichever part it lies on")])
+    return entry
 
 
 def _number(v) -> bool:
     return isinstance(v, (int, float)) and not isinstance(v, bool)
+
+
+def _stroke_value(v):
+    """An element's stroke: a positive number (symmetric) or [lower, upper] with lower < 0 < upper (m)."""
+    what = "a positive number (m) or [lower, upper] with lower < 0 < upper (m)"
+    if v is None:
+        return v
+    if _number(v):
+        if not (v > 0 and np.isfinite(v)):
+            raise ValueError(f"{v:g} must be {what}")
+        return float(v)
+    if isinstance(v, list) and len(v) == 2 and all(_number(x) and np.isfinite(x) for x in v):
+        if not v[0] < 0.0 < v[1]:
+            raise ValueError(f"[{v[0]:g}, {v[1]:g}] must be [lower, upper] with lower < 0 < upper (m)")
+        return [float(x) for x in v]
+    raise ValueError(f"{v!r} must be {what}")
 
 
 class Element(_Placed):
@@ -227,24 +248,104 @@ class Element(_Placed):
     @field_validator("stroke", mode="before")
     @classmethod
     def _stroke(cls, v):
-        what = "a positive number (m) or [lower, upper] with lower < 0 < upper (m)"
-        if v is None:
-            return v
-        if _number(v):
-            if not (v > 0 and np.isfinite(v)):
-                raise ValueError(f"{v:g} must be {what}")
-            return float(v)
-        if isinstance(v, list) and len(v) == 2 and all(_number(x) and np.isfinite(x) for x in v):
-            if not v[0] < 0.0 < v[1]:
-                raise ValueError(f"[{v[0]:g}, {v[1]:g}] must be [lower, upper] with lower < 0 < upper (m)")
-            return [float(x) for x in v]
-        raise ValueError(f"{v!r} must be {what}")
+        return _stroke_value(v)
 
     @property
     def stroke_limits(self) -> tuple[float, float] | None:
         if self.stroke is None:
             return None
         return (-self.stroke, self.stroke) if not isinstance(self.stroke, list) else tuple(self.stroke)
+
+
+class _ByDirection(_Model):
+    """An isolator's sets or strokes by direction: ``axial`` and ``shear`` (both shear lines), or
+    in space ``shear1`` and ``shear2`` separately."""
+
+    @model_validator(mode="after")
+    def _shear_once(self):
+        if self.shear is not None:
+            problems = [(k, "not with `shear` (that of both shear lines): give `shear`, or `shear1` and `shear2`")
+                        for k in ("shear1", "shear2") if getattr(self, k) is not None]
+            if problems:
+                raise _key_problems(problems)
+        return self
+
+
+class IsolatorSets(_ByDirection):
+    """The hysteresis set (a name of [hysteresis.<name>]) of each of an isolator's directions."""
+
+    axial: str
+    shear: str | None = None
+    shear1: str | None = None
+    shear2: str | None = None
+
+
+class IsolatorStrokes(_ByDirection):
+    """The stroke of each of an isolator's directions, as an element's (any may be left out)."""
+
+    axial: float | list[float] | None = None
+    shear: float | list[float] | None = None
+    shear1: float | list[float] | None = None
+    shear2: float | list[float] | None = None
+
+    @field_validator("axial", "shear", "shear1", "shear2", mode="before")
+    @classmethod
+    def _stroke(cls, v):
+        return _stroke_value(v)
+
+
+def _lines(v, what: str):
+    """Shear lines as a deck gives them: lists of numbers, one line alone as it is (how many lines
+    and components is checked with the deck's dimension, in rbhyst.model.isolators)."""
+    if isinstance(v, list) and v and all(_number(x) for x in v):
+        v = [v]
+    if not (isinstance(v, list) and v and all(isinstance(s, list) and 1 <= len(s) <= 3 for s in v)
+            and all(_number(x) and np.isfinite(x) for s in v for x in s)):
+        raise ValueError(f"{v!r} must be {what}")
+    return [[float(x) for x in s] for s in v]
+
+
+class Isolator(_Model):
+    """A mount with an axial and shear behaviour (a wire rope isolator) as one part with local
+    axes, expanded into uncoupled uniaxial elements (rbhyst.model.isolators): in space ``axial``
+    (its line, towards its support) and two ``shear`` lines (default: perpendicular to it, each
+    nearest a deck axis); in the plane ``axial_deg`` and ``shear_deg`` (default axial_deg +- 90)."""
+
+    part: Annotated[int, Field(ge=1)] | None = None
+    vertex: Annotated[int, Field(ge=1)] | None = None
+    point: Point | None = None
+    axial: Annotated[list[float], Field(min_length=2, max_length=3)] | None = None
+    shear: list[list[float]] | None = None
+    axial_deg: float | None = None
+    shear_deg: float | None = None
+    hysteresis: IsolatorSets
+    count: Annotated[int, Field(ge=1)] = 1
+    stroke: IsolatorStrokes | None = None
+
+    @field_validator("shear", mode="before")
+    @classmethod
+    def _shear(cls, v):
+        return v if v is None else _lines(v, "two shear lines, [[d1, d2, d3], [d1, d2, d3]]")
+
+    @field_validator("hysteresis", mode="before")
+    @classmethod
+    def _sets(cls, v):
+        if isinstance(v, str):
+            raise ValueError(f"{v!r}: an isolator takes a set for each direction: "
+                             "{ axial = \"...\", shear = \"...\" } (or shear1 and shear2 in space)")
+        return v
+
+    @field_validator("stroke", mode="before")
+    @classmethod
+    def _strokes(cls, v):
+        if v is not None and not isinstance(v, dict):
+            raise ValueError(f"{v!r}: an isolator takes a stroke for each direction: "
+                             "{ axial = 0.03, shear = [-0.05, 0.05] } (any may be left out)")
+        return v
+
+    @model_validator(mode="after")
+    def _one_place(self):
+        return _one_place(self)
 
 
 class Damper(_Placed):
@@ -576,6 +677,9 @@ class Deck(_Model):
     body: Body | None = None
     hysteresis: Annotated[dict[str, HysteresisSet], Field(min_length=1)]
     elements: Annotated[list[Element], Field(min_length=1)] | None = None
+    #: mounts of an axial and shear behaviour, each expanded into uniaxial elements after the
+    #: [[elements]] (rbhyst.model.isolators)
+    isolators: Annotated[list[Isolator], Field(min_length=1)] | None = None
     dampers: list[Damper] | None = None
     damping: Damping | None = None
     excitation: Excitation | None = None
@@ -589,6 +693,32 @@ class Deck(_Model):
     @property
     def source(self) -> Path | None:
         return self._source
+
+    @property
+    def supports(self) -> bool:
+        """Whether the deck has elements: [[elements]], [[isolators]] or both."""
+        return self.elements is not None or self.isolators is not None
+
+    @property
+    def element_entries(self) -> tuple[tuple[Element, "Origin"], ...]:
+        """Every element of the analysis in CSV order (e1, e2, ...; ``count`` not expanded) with
+        where it comes from: the [[elements]] entries in deck order, then each isolator's
+        (axial, shear 1, shear 2 in space; axial, shear in the plane), isolators in deck order.
+        Isolators expand once the body says the deck's dimension (none without a body); built
+        at each call (a copy of the deck with other values has its own)."""
+        from rbhyst.model.isolators import Origin, expand
+
+        out = [(el, Origin(k)) for k, el in enumerate(self.elements or [], start=1)]
+        if self.isolators and self.body is not None:
+            n = self.body.dimensions
+            for k, iso in enumerate(self.isolators, start=1):
+                out += [(el, Origin(k, role)) for el, role in expand(iso, n, Element)]
+        return tuple(out)
+
+    @property
+    def all_elements(self) -> tuple[Element, ...]:
+        """The elements of :attr:`element_entries`, without their origins."""
+        return tuple(el for el, _ in self.element_entries)
 
     @property
     def base(self) -> Path:
@@ -656,6 +786,10 @@ KEY_UNITS: dict[tuple[str, ...], str] = {
     **{(group, name): unit for group in ("elements", "dampers") for name, unit in (
         ("angle_deg", "°"), ("point", "m"), ("count", ""), ("vertex", ""), ("part", ""), ("direction", ""))},
     ("elements", "stroke"): "m", ("dampers", "c"): "N s/m",
+    **{("isolators", name): unit for name, unit in (
+        ("axial_deg", "°"), ("shear_deg", "°"), ("point", "m"), ("count", ""), ("vertex", ""), ("part", ""),
+        ("axial", ""), ("shear", ""))},
+    **{("isolators", "stroke", name): "m" for name in ("axial", "shear", "shear1", "shear2")},
     **{(*group, "*", name): unit for group in (("excitation", "support"), ("excitation", "force"))
        for name, unit in (("amplitude", "signal"), ("scale", ""), ("frequency_hz", "Hz"), ("phase_deg", "°"),
                           ("start", "s"), ("duration", "s"), ("dt", "s"), ("cycles", ""), ("ramp_cycles", ""))},
@@ -735,6 +869,14 @@ def cross_references(deck: Deck) -> list[str]:
             )
         if el.vertex is not None and deck.body is not None:
             problems += [f"elements[{k}].{p}" for p in vertex_reference_problems(deck.body, el.part, el.vertex)]
+    for k, iso in enumerate(deck.isolators or [], start=1):
+        for role in ("axial", "shear", "shear1", "shear2"):
+            name = getattr(iso.hysteresis, role)
+            if name is not None and name not in deck.hysteresis:
+                problems.append(f"isolators[{k}].hysteresis.{role}: undefined set {name!r}; "
+                                f"defined: {', '.join(sorted(deck.hysteresis))}")
+        if iso.vertex is not None and deck.body is not None:
+            problems += [f"isolators[{k}].{p}" for p in vertex_reference_problems(deck.body, iso.part, iso.vertex)]
     for k, dp in enumerate(deck.dampers or [], start=1):
         if dp.vertex is not None and deck.body is not None:
             problems += [f"dampers[{k}].{p}" for p in vertex_reference_problems(deck.body, dp.part, dp.vertex)]
@@ -797,6 +939,10 @@ def dimension_problems(deck: Deck) -> list[str]:
                                     "action as angle_deg from x1")
                 elif el.angle_deg is None:
                     problems.append(f"{section}[{k}].angle_deg: required key is missing")
+    from rbhyst.model.isolators import isolator_problems
+
+    for k, iso in enumerate(deck.isolators or [], start=1):
+        problems += isolator_problems(iso, n, f"isolators[{k}]")
     ex = deck.excitation
     if ex is not None and n == 2:
         if ex.support is not None and ex.support.x3 is not None:
@@ -864,9 +1010,10 @@ def _vertex_count(shape) -> int:
 
 
 def check_runnable(deck: Deck) -> None:
-    """``rbhyst run`` needs a body, elements and an analysis section; loops do not."""
-    missing = [f"{key}: required for an analysis" for key in ("body", "elements", "analysis")
-               if getattr(deck, key) is None]
+    """``rbhyst run`` needs a body, elements (or isolators) and an analysis section; loops do not."""
+    missing = [f"{key}: required for an analysis" for key in ("body", "analysis") if getattr(deck, key) is None]
+    if not deck.supports:
+        missing.insert(1 if deck.body is None else 0, f"elements: {SUPPORTS_MISSING}")
     if missing:
         raise InputError(missing)
     a = deck.analysis
@@ -942,8 +1089,22 @@ def _messages(err: ValidationError) -> list[str]:
     return list(dict.fromkeys(lines))
 
 
-#: the sections an analysis needs (a deck for calibrate-plot needs only [hysteresis])
+#: the sections an analysis needs (a deck for calibrate-plot needs only [hysteresis]);
+#: [[isolators]] stand for [[elements]]
 ANALYSIS_SECTIONS = ("body", "elements", "analysis")
+SUPPORTS_MISSING = "required for an analysis ([[elements]] or [[isolators]])"
+
+
+def _missing(data: dict, need: tuple[str, ...]) -> list[str]:
+    """The sections of ``need`` that ``data`` lacks (one line each); [[isolators]] give elements."""
+    out = []
+    for key in need:
+        if key == "elements" and data.get(key) is None:
+            if data.get("isolators") is None:
+                out.append(f"elements: {SUPPORTS_MISSING}")
+        elif data.get(key) is None:
+            out.append(f"{key}: required for an analysis")
+    return out
 
 
 def parse_deck(data: Any, need: tuple[str, ...] = ()) -> Deck:
@@ -951,7 +1112,7 @@ def parse_deck(data: Any, need: tuple[str, ...] = ()) -> Deck:
     once: those of the keys given and every section of ``need`` that is missing."""
     if not isinstance(data, dict):
         raise InputError("(deck): the top level must be a table of keys")
-    missing = [f"{key}: required for an analysis" for key in need if data.get(key) is None]
+    missing = _missing(data, need)
     try:
         deck = Deck.model_validate(data)
     except ValidationError as err:

@@ -252,7 +252,8 @@ def load_directions(coordinates, point=(0.0, 0.0)) -> dict[str, tuple[float, ...
 
 @dataclass(frozen=True)
 class Element:
-    """One [[elements]] entry as the user wrote it; ``row`` is its row in the kernel arrays."""
+    """One [[elements]] entry as the user wrote it, or one direction of an [[isolators]] entry;
+    ``row`` is its row in the kernel arrays."""
 
     x: tuple[float, ...]  # attachment point relative to G, m (three coordinates in space)
     angle_deg: float | None  # in the plane; None in space
@@ -261,6 +262,12 @@ class Element:
     row: int
     stroke: tuple[float, float] | None = None  # (lower, upper) deformation it can take, m
     direction: tuple[float, float, float] | None = None  # in space: the unit line of action
+    #: the [[isolators]] entry it is a direction of (1-based), and which: "axial", "shear1",
+    #: "shear2" in space, "axial", "shear" in the plane; None for an [[elements]] entry
+    isolator: int | None = None
+    role: str | None = None
+    #: where it is in the deck: "elements[3]" or "isolators[2] shear1"
+    label: str = ""
 
     @property
     def line(self) -> str:
@@ -537,7 +544,7 @@ def implausible_geometry(body, elements) -> list[str]:
         r = math.hypot(*el.x)
         if r > FAR_ELEMENT * size:
             where = ", ".join(f"{x + c:.4g}" for x, c in zip(el.x, g))
-            notes.append(f"elements[{k}]: attached at ({where}) m, {r:.4g} m from the mass centre: "
+            notes.append(f"{el.label or f'elements[{k}]'}: attached at ({where}) m, {r:.4g} m from the mass centre: "
                          f"{r / size:.3g} times the body's size ({size:.4g} m)")
     return notes
 
@@ -661,26 +668,32 @@ def _kernel_rows(deck: dk.Deck, body: Body, exact: bool):
     the Element entries in deck order). An element that deforms exactly like another with the
     same set shares its row: the seed's shear isolators under P1 and P2 share b = (0, 1, x1)."""
     xs, bs = [], []
-    for el in deck.elements:
+    entries = deck.element_entries
+    for el, _ in entries:
         x = body.vertex(el.part, el.vertex) if el.vertex is not None else np.asarray(el.point, float) - body.mass_centre
         xs.append(x)
         bs.append(b_vector(x[0], x[1], math.radians(el.angle_deg)))
     b_all = np.array(bs)
     # with exact kinematics two elements deform alike only if their points also lie alike along
     # their line of action (d . r): the seed's shear isolators under P1 and P2 then part
-    c_all = np.array([axial_offset(x[0], x[1], math.radians(el.angle_deg)) for x, el in zip(xs, deck.elements)])
+    c_all = np.array([axial_offset(x[0], x[1], math.radians(el.angle_deg)) for x, (el, _) in zip(xs, entries)])
     firsts, row_of = _row_groups(np.column_stack([b_all, c_all]) if exact else b_all, deck)
     rows = [b_all[f] for f in firsts]
     axial = np.array([c_all[f] for f in firsts])
-    names = [deck.elements[f].hysteresis for f in firsts]
+    names = [entries[f][0].hysteresis for f in firsts]
     mult = [0] * len(rows)
     elements = []
-    for i, el in enumerate(deck.elements):
+    for i, (el, origin) in enumerate(entries):
         row = int(row_of[i])
         mult[row] += el.count
         elements.append(Element((float(xs[i][0]), float(xs[i][1])), el.angle_deg, el.hysteresis, el.count, row,
-                                el.stroke_limits))
+                                el.stroke_limits, **_origin(origin)))
     return rows, axial, names, mult, elements
+
+
+def _origin(origin) -> dict:
+    """An Element's keys for where it comes from (rbhyst.model.isolators.Origin)."""
+    return {"isolator": origin.isolator, "role": origin.role, "label": origin.label}
 
 
 def _row_groups(keyed: np.ndarray, deck: dk.Deck) -> tuple[list[int], np.ndarray]:
@@ -689,7 +702,7 @@ def _row_groups(keyed: np.ndarray, deck: dk.Deck) -> tuple[list[int], np.ndarray
     the order of their first elements; each element's row)."""
     key = np.round(keyed / 1e-12).astype(np.int64)
     set_ids = {name: i for i, name in enumerate(deck.hysteresis)}
-    key = np.column_stack([key, [set_ids[el.hysteresis] for el in deck.elements]])
+    key = np.column_stack([key, [set_ids[el.hysteresis] for el in deck.all_elements]])
     _, first, inverse = np.unique(key, axis=0, return_index=True, return_inverse=True)
     order = np.argsort(first)  # rows in the order of their first element
     row_of = np.empty(len(first), dtype=int)
@@ -745,7 +758,8 @@ def _check_sections(deck: dk.Deck, run: bool) -> None:
     if run:
         dk.check_runnable(deck)
         return
-    missing = [f"{key}: required for the body's modes" for key in ("body", "elements") if getattr(deck, key) is None]
+    missing = [f"{key}: required for the body's modes" for key, there in (("body", deck.body is not None),
+                                                                          ("elements", deck.supports)) if not there]
     if missing:
         raise InputError(missing)
 
@@ -839,7 +853,8 @@ def _kernel_rows_space(deck: dk.Deck, body, frame, exact: bool = False):
 
     p = np.eye(3) if frame is None else frame[3:, 3:]
     xs, bs, ds = [], [], []
-    for el in deck.elements:
+    entries = deck.element_entries
+    for el, _ in entries:
         x = _placed_space(body, el)
         d = unit(el.direction)
         b = row(x, d)
@@ -850,14 +865,14 @@ def _kernel_rows_space(deck: dk.Deck, body, frame, exact: bool = False):
     arms = np.column_stack([np.array(xs) @ p, np.array(ds) @ p])  # (x', d') = (P^T x, P^T d) per element
     firsts, row_of = _row_groups(np.column_stack([b_all, arms]) if exact else b_all, deck)
     rows = [b_all[f] for f in firsts]
-    names = [deck.elements[f].hysteresis for f in firsts]
+    names = [entries[f][0].hysteresis for f in firsts]
     mult = [0] * len(rows)
     elements = []
-    for i, el in enumerate(deck.elements):
+    for i, (el, origin) in enumerate(entries):
         r = int(row_of[i])
         mult[r] += el.count
         elements.append(Element(tuple(float(v) for v in xs[i]), None, el.hysteresis, el.count, r, el.stroke_limits,
-                                tuple(float(v) for v in ds[i])))
+                                tuple(float(v) for v in ds[i]), **_origin(origin)))
     return rows, names, mult, elements, np.concatenate([arms[f] for f in firsts])
 
 

@@ -1,5 +1,6 @@
-"""What `rbhyst run` prints about its elements: one aligned row per [[elements]] entry (identical
-elements in parallel, `count`, share one), from summary.json's numbers; and the body's modes (what
+"""What `rbhyst run` prints about its elements: one aligned row per [[elements]] entry and per
+direction of an [[isolators]] entry (identical elements in parallel, `count`, share one; a column
+names the isolator and direction where the deck has isolators), from summary.json's numbers; and the body's modes (what
 `rbhyst modes` prints too). Plain text, no matplotlib."""
 
 from __future__ import annotations
@@ -24,6 +25,7 @@ def element_table(summary: dict, all_up_to: int = ALL_UP_TO, shown: int = SHOWN)
         stroke = el.get("stroke")
         rows.append({
             "label": f"e{k}" if n == 1 else f"e{k}-e{k + n - 1} (each)",
+            "isolator": f"{el['isolator']} {el['role']}" if "isolator" in el else "-",
             "set": el["hysteresis"],
             "angle": el.get("angle_deg"),
             "direction": el.get("direction"),
@@ -45,13 +47,16 @@ def element_table(summary: dict, all_up_to: int = ALL_UP_TO, shown: int = SHOWN)
     kn = max(r["f"] for r in rows) >= 1e3
     strokes = any(r["limits"] is not None for r in rows)
     space = any(r["direction"] is not None for r in rows)
-    header = ["element", "set", "direction" if space else "angle [deg]", f"peak |f| [{'kN' if kn else 'N'}]", "peak u [mm]"]
+    isolators = any(r["isolator"] != "-" for r in rows)  # a column of which isolator, when there are any
+    header = ["element", *(["isolator"] if isolators else []), "set", "direction" if space else "angle [deg]",
+              f"peak |f| [{'kN' if kn else 'N'}]", "peak u [mm]"]
     if strokes:
         header += ["stroke [mm]", "used"]
     table = [header]
     for r in rows:
         line = ("(" + ", ".join(f"{d + 0.0:.3g}" for d in r["direction"]) + ")") if space else f"{r['angle']:g}"
-        cells = [r["label"], r["set"], line, f"{r['f'] * (1e-3 if kn else 1.0):.4g}",
+        cells = [r["label"], *([r["isolator"]] if isolators else []), r["set"], line,
+                 f"{r['f'] * (1e-3 if kn else 1.0):.4g}",
                  f"{r['u'] * 1e3:+.4g}"]
         if strokes:
             if r["limits"] is None:
@@ -60,7 +65,7 @@ def element_table(summary: dict, all_up_to: int = ALL_UP_TO, shown: int = SHOWN)
                 lo, hi = r["limits"]
                 cells += [f"{lo * 1e3:g}, +{hi * 1e3:g}", _percent(r["used"])]
         table.append(cells)
-    left = {0, 1}  # names to the left, numbers to the right
+    left = {0, 1, 2} if isolators else {0, 1}  # names to the left, numbers to the right
     if strokes and any(r["used"] is not None and r["used"] > 1.0 for r in rows):
         # "152% over": the percentages aligned on their right, the word after them
         used = len(header) - 1

@@ -369,7 +369,7 @@ def _model(folder: Path, owned: set[str], s: dict) -> str:
     rows, k = [], 1
     for i, e in enumerate(s.get("elements", [])):
         p = f"{src}:elements.{i}"
-        label = f"e{k}" if e["count"] == 1 else f"e{k}-e{k + e['count'] - 1}"
+        label = (f"e{k}" if e["count"] == 1 else f"e{k}-e{k + e['count'] - 1}") + _isolator(e)
         st = e.get("stroke")
         rows.append([label, e["hysteresis"], str(e["count"]), *_place(e, p),
                      num(e["k0_N_m"], f"{p}.k0_N_m"), num(e["k_reversal_N_m"], f"{p}.k_reversal_N_m"),
@@ -406,6 +406,11 @@ def _model(folder: Path, owned: set[str], s: dict) -> str:
             for c in ("u1_m", "u2_m", "u3_m", "theta1_rad", "theta2_rad", "theta3_rad") if c in st]))
     out.append("</section>")
     return "".join(out)
+
+
+def _isolator(entry: dict) -> str:
+    """" (isolator 2 shear1)" after an element's label when it is a direction of an isolator."""
+    return f" (isolator {entry['isolator']} {entry['role']})" if "isolator" in entry else ""
 
 
 def _place(entry: dict, path: str) -> list[str]:
@@ -458,7 +463,7 @@ def _peaks(s: dict) -> str:
         for _ in range(e["count"]):
             f, u = f"e{k}_f_N", f"e{k}_u_m"
             st = e.get("stroke")
-            rows.append([f"e{k}", e["hysteresis"], num(peaks.get(f), f"{src}:peaks.{f}"),
+            rows.append([f"e{k}{_isolator(e)}", e["hysteresis"], num(peaks.get(f), f"{src}:peaks.{f}"),
                          num(peaks.get(u), f"{src}:peaks.{u}"),
                          num(s["extremes"][u]["max"], f"{src}:extremes.{u}.max"),
                          num(s["extremes"][u]["min"], f"{src}:extremes.{u}.min"),

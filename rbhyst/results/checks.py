@@ -78,7 +78,7 @@ def gravity_checks(result: Result) -> tuple[list[str], list[str]]:
             lo, hi = el.stroke
             for j in range(el.count):
                 if not lo <= u[k + j] <= hi:
-                    warnings.append(f"element e{k + j + 1} ({el.hysteresis!r}) is beyond its stroke under the weight "
+                    warnings.append(f"element e{k + j + 1} ({_which(el)}) is beyond its stroke under the weight "
                                     f"alone: {u[k + j]:.4g} m against [{lo:g}, {hi:g}] m")
         k += el.count
     return notes, warnings
@@ -115,6 +115,13 @@ SIGNAL_KEYS = {"ag1": "excitation.support.x1", "ag2": "excitation.support.x2", "
                "p3": "excitation.force.p3", "m1": "excitation.force.m1", "m2": "excitation.force.m2"}
 
 
+def _which(el) -> str:
+    """An element as a warning names it: its set, and the isolator direction it is, if one."""
+    if getattr(el, "isolator", None) is None:
+        return repr(el.hysteresis)
+    return f"{el.label}, {el.hysteresis!r}"
+
+
 def stroke_warnings(result: Result) -> list[str]:
     """An element beyond its stroke: which, how far, when."""
     from rbhyst.solve.result import stroke_use
@@ -125,7 +132,7 @@ def stroke_warnings(result: Result) -> list[str]:
             use = stroke_use(result.extremes, f"e{k}_u_m", el.stroke)
             if use["utilization"] > 1.0:
                 span = f"e{k}" if el.count == 1 else f"e{k}-e{k + el.count - 1}"
-                out.append(f"element {span} ({el.hysteresis!r}) goes beyond its stroke: {use['peak_deformation_m']:.4g} m "
+                out.append(f"element {span} ({_which(el)}) goes beyond its stroke: {use['peak_deformation_m']:.4g} m "
                            f"at t = {use['time_of_peak_s']:.4g} s against a limit of "
                            f"{el.stroke[1] if use['peak_deformation_m'] > 0 else el.stroke[0]:g} m "
                            f"({use['utilization']:.0%} of it)")

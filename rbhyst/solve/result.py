@@ -197,14 +197,18 @@ class Result:
         }
 
     def _elements_summary(self) -> list[dict]:
-        """Each [[elements]] entry: place, set, stiffnesses, and where it has a stroke, how much of it
-        the run used (peak deformation over every step / its limit, and when)."""
+        """Each [[elements]] entry, then each direction of each [[isolators]] entry: place, set,
+        stiffnesses, for an isolator's the isolator (1-based) and the role (axial, shear1,
+        shear2; in the plane axial, shear), and where it has a stroke, how much of it the run used
+        (peak deformation over every step / its limit, and when)."""
         system, e = self.system, self.extremes
         out, k = [], 1
         for el in system.elements:
             entry = {"x_m": list(el.x), **_line(el), "hysteresis": el.hysteresis,
                      "count": el.count, "k0_N_m": float(system.k0[el.row]),
                      "k_reversal_N_m": float(system.k_reversal[el.row])}
+            if getattr(el, "isolator", None) is not None:
+                entry.update(isolator=el.isolator, role=el.role)
             if el.stroke is not None:
                 entry["stroke"] = stroke_use(e, f"e{k}_u_m", el.stroke)
             out.append(entry)

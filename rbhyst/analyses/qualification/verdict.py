@@ -139,13 +139,13 @@ def _limit_problems(deck, values: dict, space: bool = False) -> list[str]:
             problems.append(f"qualify.acceleration_limit_g.{name}: {len(limit)} values: one number for every "
                             f"direction or {said}")
     caps = values.get("force_capacity_N")
-    n_el = sum(el.count for el in deck.elements or [])
+    n_el = sum(el.count for el in deck.all_elements)
     if isinstance(caps, dict):
         for name in caps:
             if not (name.startswith("e") and name[1:].isdigit() and 1 <= int(name[1:]) <= n_el):
                 problems.append(f"qualify.force_capacity_N.{name}: not an element: e1 to e{n_el}, as in "
                                 "time_history.csv (count expanded)")
-    strokes = any(el.stroke is not None for el in deck.elements or [])
+    strokes = any(el.stroke is not None for el in deck.all_elements)
     if not (strokes or values.get("acceleration_limit_g") or caps):
         problems.append("qualify: nothing to hold the deck to: give elements a stroke, or "
                         "qualify.acceleration_limit_g (per point, g) or qualify.force_capacity_N")
@@ -329,7 +329,7 @@ def _criteria(deck, req: Request, summaries: list[dict]) -> list[dict]:
     """Every criterion's demand (from each run's summary), capacity, margin and pass."""
     out = []
     first = 1
-    for i, el in enumerate(deck.elements, start=1):
+    for i, (el, origin) in enumerate(deck.element_entries, start=1):
         span = f"e{first}" if el.count == 1 else f"e{first}-e{first + el.count - 1}"
         if el.stroke is not None:
             strokes = [s["elements"][i - 1]["stroke"] for s in summaries]
@@ -342,8 +342,8 @@ def _criteria(deck, req: Request, summaries: list[dict]) -> list[dict]:
             capacity = hi if up else -lo
             peaks = [abs(st["peak_deformation_m"]) if (st["peak_deformation_m"] >= 0) == up else u * capacity
                      for st, u in zip(strokes, use)]
-            out.append(_criterion("stroke", f"elements[{i}] ({span})", "m", peaks, capacity,
-                                  f"stroke elements[{i}] ({span})",
+            out.append(_criterion("stroke", f"{origin.label} ({span})", "m", peaks, capacity,
+                                  f"stroke {origin.label} ({span})",
                                   utilization=[float(u) for u in use], column=f"e{first}_u_m"))
         first += el.count
     directions = list(req.axes)  # x1, x2 (and x3 in space)
@@ -356,7 +356,7 @@ def _criteria(deck, req: Request, summaries: list[dict]) -> list[dict]:
                                   f"acceleration {name} {direction}", column=column))
     caps = req.force_capacity_N
     if caps is not None:
-        n_el = sum(el.count for el in deck.elements)
+        n_el = sum(el.count for el in deck.all_elements)
         named = caps if isinstance(caps, dict) else {f"e{k}": caps for k in range(1, n_el + 1)}
         for name in sorted(named, key=lambda e: int(e[1:])):
             column = f"{name}_f_N"
