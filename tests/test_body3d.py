@@ -294,6 +294,15 @@ def test_a_small_sweep_in_space_runs(tmp_path):
     assert len(cases) == 3 and "peak_u3_m" in cases[0] and "peak_theta1_rad" in cases[0], cases[0]
 
 
+def sample_by_elements() -> dict:
+    """decks/cabinet_3d.toml as a mapping, its isolators written out as the twelve elements they are."""
+    deck = rbhyst.load_deck(DECKS / "cabinet_3d.toml")
+    data = deck.model_dump(mode="python", exclude_unset=True)
+    data.pop("isolators", None)
+    data["elements"] = [el.model_dump(mode="python", exclude_unset=True) for el in deck.all_elements]
+    return data
+
+
 MISTAKES = [
     ("mixed coordinates", lambda d: d["elements"][0].update(point=[0.0, 0.0]) or d["elements"][0].pop("vertex"),
      "elements[1].point: List should have at least 3 items"),
@@ -333,7 +342,7 @@ def test_a_deck_mistake_in_space_is_one_line_naming_the_key(tmp_path, name, chan
         else:
             data["body"]["vertices"][1] = [0.4714, 1.0571, 0.0]
     else:
-        data = rbhyst.load_deck(DECKS / "cabinet_3d.toml").model_dump(mode="python", exclude_unset=True)
+        data = sample_by_elements()
         for axis in ("x1", "x2", "x3"):
             data["excitation"]["support"][axis]["file"] = str(DECKS / data["excitation"]["support"][axis]["file"])
         change(data)
@@ -345,7 +354,7 @@ def test_a_deck_mistake_in_space_is_one_line_naming_the_key(tmp_path, name, chan
 def test_a_body_of_parts_in_space_is_their_parallel_axis_sum():
     """Two boxes as [[body.parts]] (one given by its vertices) are the one box they make up; a
     vertex of the second part is found by part and vertex."""
-    data = rbhyst.load_deck(DECKS / "cabinet_3d.toml").model_dump(mode="python", exclude_unset=True)
+    data = sample_by_elements()
     data.pop("excitation")
     data["analysis"]["duration"] = 1.0
     data["body"] = {"parts": [{"box": {"size": [0.8, 0.6, 1.0], "centre": [0.4, 0.3, 0.5]}, "mass": 275.0},
