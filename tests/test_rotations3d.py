@@ -248,3 +248,56 @@ def test_rest_under_gravity_stays_rest_with_exact_rotations(tmp_path):
     system, settings = scene(data, tmp_path)
     res = simulate(system, dataclasses.replace(settings, integrator="chang"))
     assert np.max(np.abs(res.d)) < 1e-12 and np.max(np.abs(res.v)) < 1e-12
+
+
+def test_a_small_rotation_run_in_space_reports_its_difference_from_exact(tmp_path):
+    """summary's ``kinematics`` of the box turned 0.2-0.5 rad with small rotations: the exact twin's
+    difference per column (the same numbers as an exact run of its own), and a warning."""
+    from rbhyst.results.analysis import analyse
+
+    system, settings = scene(deck("small"), tmp_path)
+    res = analyse(system, dataclasses.replace(settings, integrator="chang"), keep=True)
+    kin = res.kinematics
+    assert kin["model"] == "small" and kin["neglected"]["share"] > 0.01
+    exact = run(scene(deck("exact"), tmp_path), integrator="chang")
+    want = rel(res.column("u2_m"), exact.column("u2_m"))
+    assert kin["difference"]["u2"] == pytest.approx(want, rel=1e-6)
+    assert kin["worst"]["difference"] > 0.05
+    said = [w for w in res.warnings if "small rotations" in w]
+    assert len(said) == 1 and 'analysis.kinematics = "exact"' in said[0]
+
+
+def test_a_barely_turning_run_in_space_pays_nothing_and_says_why(tmp_path):
+    from rbhyst.results.analysis import analyse
+
+    system, settings = scene(deck("small", scale=1e-4), tmp_path)
+    res = analyse(system, settings, keep=True)
+    kin = res.kinematics
+    assert kin["difference"] is None and kin["neglected"]["share"] < 1e-3 and "not computed" in kin["method"]
+    assert not [w for w in res.warnings if "rotation" in w]
+
+
+def test_the_modes_at_rest_feel_the_weight_with_exact_rotations_in_space(tmp_path):
+    """The box on four vertical springs at its base corners and horizontal ones at G's level,
+    under gravity along -x3: with exact rotations the rocking stiffnesses at rest are
+    k_v sum y^2 - W h and k_v sum x^2 - W h (P-Delta, h from the springs up to G), torsion
+    untouched; the seed's rows lack the W h."""
+    from rbhyst.solve.modes import tangent_at_rest
+
+    kv, kh = 2.0e5, 1.0e5
+    base = [[sx * A, sy * B, -H] for sx in (-1, 1) for sy in (-1, 1)]
+    data = deck("small", scale=0.0)
+    data["body"]["gravity"] = [0.0, 0.0, -9.81]
+    data["hysteresis"] = {"v": linear_set(kv), "h": linear_set(kh)}
+    data["elements"] = ([{"point": p, "direction": [0, 0, 1], "hysteresis": "v"} for p in base]
+                        + [{"point": [A, 0, 0], "direction": [0, 1, 0], "hysteresis": "h"},
+                           {"point": [-A, 0, 0], "direction": [0, 1, 0], "hysteresis": "h"},
+                           {"point": [0, B, 0], "direction": [1, 0, 0], "hysteresis": "h"}])
+    weight = MASS * 9.81
+    for kin, geo in (("small", 0.0), ("exact", weight * H)):
+        data["analysis"]["kinematics"] = kin
+        system, _ = scene(data, tmp_path)
+        k = tangent_at_rest(system)
+        assert k[3, 3] == pytest.approx(4 * kv * B * B - geo, rel=1e-9), kin
+        assert k[4, 4] == pytest.approx(4 * kv * A * A - geo, rel=1e-9), kin
+        assert k[5, 5] == pytest.approx(2 * kh * A * A + kh * B * B, rel=1e-9), kin

@@ -22,7 +22,7 @@ import numpy as np
 
 from rbhyst.errors import AnalysisError
 
-#: the kinematic difference is computed where theta_max / 2 exceeds this fraction of warn_error
+#: the kinematic difference is computed where the neglected terms reach this fraction of warn_error
 CHECK_FRACTION = 0.1
 
 

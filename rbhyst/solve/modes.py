@@ -138,7 +138,7 @@ def tangent_at_rest(system) -> np.ndarray:
         from rbhyst.solve.static import static_equilibrium
 
         static = static_equilibrium(system)
-    if system.rotation_index < 0:
+    if system.kinematics != "exact":
         return element_stiffness(system, static.st[:, TANGENT])
     # exact kinematics: the rows turned with the body, and the forces' geometric stiffness (the
     # weight's P-Delta) sum mult f d2u/dtheta2 on the rotation

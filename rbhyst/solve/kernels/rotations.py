@@ -19,7 +19,7 @@ from numba import njit
 SMALL_ANGLE = 1e-4
 
 
-@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+@njit(cache=True, error_model="numpy", _nrt=False)
 def rotation(p0, p1, p2):
     """R = exp([p]x) of the rotation vector p (Rodrigues' formula), as a 9-tuple row by row."""
     t2 = p0 * p0 + p1 * p1 + p2 * p2
@@ -37,7 +37,7 @@ def rotation(p0, p1, p2):
             b * p2 * p0 - a * p1, b * p2 * p1 + a * p0, 1.0 + b * (p2 * p2 - t2))
 
 
-@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+@njit(cache=True, error_model="numpy", _nrt=False)
 def product(a, b):
     """The 3x3 product a b of two 9-tuples."""
     return (a[0] * b[0] + a[1] * b[3] + a[2] * b[6], a[0] * b[1] + a[1] * b[4] + a[2] * b[7],
@@ -84,7 +84,7 @@ def rotation_vector(r):
     return sign * t * n0, sign * t * n1, sign * t * n2
 
 
-@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+@njit(cache=True, error_model="numpy", _nrt=False)
 def turned(q0, q):
     """The attitude a step reaches: R(psi0) exp([Delta]x), psi0 = q0[3:6] where the step starts
     and Delta = q[3:6] - q0[3:6] the turn it takes in the body's axes (a step writes its state as
@@ -93,7 +93,7 @@ def turned(q0, q):
     return product(r0, rotation(q[3] - q0[3], q[4] - q0[4], q[5] - q0[5]))
 
 
-@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+@njit(cache=True, error_model="numpy", _nrt=False)
 def compose(q0, q):
     """q[3:6] := the rotation vector of R(psi0) exp([Delta]x) (see ``turned``)."""
     p0, p1, p2 = rotation_vector(turned(q0, q))
@@ -102,7 +102,7 @@ def compose(q0, q):
     q[5] = p2
 
 
-@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+@njit(cache=True, error_model="numpy", _nrt=False)
 def turn_moments(r, p, f0, f1, f2, axial):
     """p[3:6] := R^T (m - r_p x f) + r_p x (R^T f) (see ``body_load``; f = 0 where no force
     acts away from G)."""
@@ -119,7 +119,7 @@ def turn_moments(r, p, f0, f1, f2, axial):
     p[5] = r[2] * m0 + r[5] * m1 + r[8] * m2 + (x0 * g1 - x1 * g0)
 
 
-@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+@njit(cache=True, error_model="numpy", _nrt=False)
 def body_load(r, load, j, w, n, axial, p):
     """The load's moments p[3:6] (about G, in the ground's axes) turned into the body's at the
     attitude r (9-tuple): R^T m; where forces act away from G (load columns n..n+2: their
@@ -134,7 +134,7 @@ def body_load(r, load, j, w, n, axial, p):
     turn_moments(r, p, f0, f1, f2, axial)
 
 
-@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+@njit(cache=True, error_model="numpy", _nrt=False)
 def arm(axial, e, r):
     """What element row e's point and line (x', d': axial[6 e:6 e + 6], in the kernels' rotation
     axes) give at the attitude r (9-tuple): (d' . (R x' - x'), the three components of
@@ -152,7 +152,7 @@ def arm(axial, e, r):
     return (c0 * y0 + c1 * y1 + c2 * y2, x1 * a2 - x2 * a1, x2 * a0 - x0 * a2, x0 * a1 - x1 * a0, a0, a1, a2)
 
 
-@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+@njit(cache=True, error_model="numpy", _nrt=False)
 def element_row(bvec, axial, e, r, q, bq):
     """Element row e at the attitude r (9-tuple) and q: its deformation d . (u + R x - x) and its
     row b_e(q) = (d, x' x R^T d') into bq[e] (d: bvec[e, :3], in the kernels' translation axes;
@@ -167,7 +167,7 @@ def element_row(bvec, axial, e, r, q, bq):
     return bvec[e, 0] * q[0] + bvec[e, 1] * q[1] + bvec[e, 2] * q[2] + t[0]
 
 
-@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+@njit(cache=True, error_model="numpy", _nrt=False)
 def centripetal(axial, e, t, w0, w1, w2):
     """The part of element e's deformation acceleration the rows leave out: (R^T d') . (omega x
     (omega x x')), t = arm(axial, e, R), omega in the body's axes."""
@@ -179,7 +179,7 @@ def centripetal(axial, e, t, w0, w1, w2):
     return t[4] * (w1 * v2 - w2 * v1) + t[5] * (w2 * v0 - w0 * v2) + t[6] * (w0 * v1 - w1 * v0)
 
 
-@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+@njit(cache=True, error_model="numpy", _nrt=False)
 def attitude_rate(p0, p1, p2, w0, w1, w2):
     """d psi / dt for the body's angular velocity omega (its own axes): J_r(psi)^-1 omega =
     omega + psi x omega / 2 + beta psi x (psi x omega), beta = (1 - (t/2) cot(t/2)) / t^2
@@ -197,7 +197,7 @@ def attitude_rate(p0, p1, p2, w0, w1, w2):
             w2 + 0.5 * c2 + beta * (p0 * c1 - p1 * c0))
 
 
-@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+@njit(cache=True, error_model="numpy", _nrt=False)
 def gyroscopic(mass, v, i):
     """Component i (3, 4, 5) of omega x J omega, omega = v[3:6] in the body's principal axes,
     J = diag(mass[3:6]) (mass a tuple of n = 6; its indices are not literals, so that the plane's
@@ -211,7 +211,7 @@ def gyroscopic(mass, v, i):
     return (j1 - j0) * v[3] * v[4]
 
 
-@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+@njit(cache=True, error_model="numpy", _nrt=False)
 def add_geometric(axial, mult, st, nxt, r, wm):
     """Add the elements' geometric stiffness to wm[3:6, 3:6]: the change of their moments
     sum mult f x' x R^T d' as the body turns by delta in its own axes (R -> R exp([delta]x)),
