@@ -76,7 +76,7 @@ def run(scene_, **overrides):
     return simulate(system, dataclasses.replace(settings, **overrides))
 
 
-def newton_euler(t, y, scale):
+def newton_euler(t, y, scale, dampers=()):
     """d/dt (x, quaternion (scalar last), v, omega_body): each spring along its fixed direction d
     pulls at its body point x + R r with -k (d . u_P) d, moment (R r) x F about G; the pulses'
     moments and the force at its turned point; J omega' = R^T M - omega x J omega."""
@@ -91,6 +91,12 @@ def newton_euler(t, y, scale):
         f = -K * float(d @ (x + rp - p)) * d
         force = force + f
         moment = moment + np.cross(rp, f)
+    for p, d, c in dampers:  # along its fixed line, on its turned point's velocity
+        d = np.asarray(d)
+        rp = r @ np.asarray(p)
+        f = -c * float(d @ (v + np.cross(r @ w, rp))) * d
+        force = force + f
+        moment = moment + np.cross(rp, f)
     j = box_inertia()
     dw = np.linalg.solve(j, r.T @ moment - np.cross(w, j @ w))
     x0, x1, x2, x3 = qt  # q' = q (0, omega) / 2, scalar last
@@ -99,12 +105,12 @@ def newton_euler(t, y, scale):
     return np.concatenate([v, dq, force / MASS, dw])
 
 
-def independent(t_out: np.ndarray, scale: float = 1.0):
+def independent(t_out: np.ndarray, scale: float = 1.0, dampers=()):
     """(x (k, 3), attitudes (scipy Rotation), omega in the ground's axes (k, 3)) at t_out."""
     y0 = np.zeros(13)
     y0[6] = 1.0
     sol = solve_ivp(newton_euler, (0.0, t_out[-1]), y0, method="DOP853", rtol=1e-12, atol=1e-14, t_eval=t_out,
-                    max_step=0.01, args=(scale,))
+                    max_step=0.01, args=(scale, dampers))
     assert sol.success
     att = Rotation.from_quat(sol.y[3:7].T / np.linalg.norm(sol.y[3:7].T, axis=1)[:, None])
     return sol.y[:3].T, att, att.apply(sol.y[10:13].T)
@@ -301,3 +307,30 @@ def test_the_modes_at_rest_feel_the_weight_with_exact_rotations_in_space(tmp_pat
         assert k[3, 3] == pytest.approx(4 * kv * B * B - geo, rel=1e-9), kin
         assert k[4, 4] == pytest.approx(4 * kv * A * A - geo, rel=1e-9), kin
         assert k[5, 5] == pytest.approx(2 * kh * A * A + kh * B * B, rel=1e-9), kin
+
+
+#: dampers at corners, off their lines: point, direction, c (N s/m)
+DAMPERS = (((A, -B, -H), (1.0, 0.0, 0.0), 600.0), ((-A, B, H), (0.0, 0.6, 0.8), 900.0))
+
+
+@pytest.mark.parametrize("integrator", ["adaptive", *FIXED_STEP])
+def test_dampers_turn_with_the_body_in_space(tmp_path, integrator):
+    data = deck("exact")
+    data["dampers"] = [{"point": list(p), "direction": list(d), "c": c} for p, d, c in DAMPERS]
+    sc = scene(data, tmp_path)
+    if integrator == "adaptive":
+        res = run(sc, **ADAPTIVE)
+        x, att, omega = independent(res.time, dampers=DAMPERS)
+        assert rel(res.d[:, :3], x) < 1e-6 and rel(res.d[:, 3:], att.as_rotvec()) < 1e-6
+        assert rel(res.v[:, 3:], omega) < 1e-6
+        assert res.energy_balance < 1e-7
+        return
+    errs = []
+    dts = (2e-3, 1e-3, 5e-4)
+    for dt in dts:
+        res = run(sc, integrator=integrator, dt=dt)
+        _, att, _ = independent(res.time, dampers=DAMPERS)
+        errs.append(rel(res.d[:, 3:], att.as_rotvec()))
+    order = math.log(errs[0] / errs[-1]) / math.log(dts[0] / dts[-1])
+    assert order == pytest.approx(2.0, abs=0.25), errs
+    assert res.energy_balance < 1e-3

@@ -161,3 +161,26 @@ def _exact_twin_space(system):
     return replace(system, bvec=system.bvec[old], mult=mult, params=system.params[old], k0=system.k0[old],
                    k_reversal=system.k_reversal[old], elements=tuple(elements), static=None, excitation=excitation,
                    kinematics="exact", axial=axial)
+
+
+def damper_rows(system, q: np.ndarray) -> np.ndarray:
+    """(k, dampers, n) each [[dampers]] entry's row b_d(q) at the configurations q (k, n), in the
+    kernels' axes: the plane's (b1, b2, b3 cos(theta) - c sin(theta)), in space (d, x' x R^T d')
+    (rbhyst.solve.kernels.elements.turned_dampers); the rows at rest with small rotations."""
+    q = np.atleast_2d(np.asarray(q, dtype=float))
+    rest = np.array([dp.b for dp in system.dampers], dtype=float).reshape(-1, system.n)
+    rows = np.broadcast_to(rest, (len(q),) + rest.shape).copy()
+    rot = system.rotation_index
+    if system.kinematics != "exact" or not len(rest):
+        return rows
+    data = system.kernel_damping[system.n:]
+    if rot == SPATIAL:
+        from rbhyst.model.rotations import matrices
+
+        x, c = data[0::2, 3:6], data[1::2, :3]
+        a = np.einsum("kji,dj->kdi", matrices(q[:, 3:6]), c)  # R^T d'
+        rows[:, :, 3:] = np.cross(x[None], a)
+        return rows
+    th = q[:, rot][:, None]
+    rows[:, :, rot] = rest[None, :, rot] * np.cos(th) - data[1::2, 0][None] * np.sin(th)
+    return rows

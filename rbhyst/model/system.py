@@ -461,6 +461,26 @@ class System:
         return c
 
     @property
+    def kernel_damping(self) -> np.ndarray:
+        """C for the kernels: (n, n), and with exact kinematics two more rows per damper, its row
+        at rest and its offset along its line (the plane: (b1, b2, b3), (c, c count, 0)) or its
+        line and point in the kernels' axes (space: (d, x'), (d', c count, 0, 0)), from which the
+        kernels turn its row with the body (rbhyst.solve.kernels.elements.turned_dampers)."""
+        c = self.C
+        if self.kinematics != "exact" or not self.dampers:
+            return c
+        rows = []
+        p = np.eye(3) if self.frame is None else np.asarray(self.frame)[3:, 3:]
+        for dp in self.dampers:
+            total = dp.c * dp.count
+            if dp.direction is None:
+                rows += [list(dp.b), [axial_offset(dp.x[0], dp.x[1], math.radians(dp.angle_deg)), total, 0.0]]
+            else:
+                d = np.asarray(dp.direction, dtype=float)
+                rows += [[*d, *(p.T @ np.asarray(dp.x, dtype=float))], [*(p.T @ d), total, 0.0, 0.0]]
+        return np.vstack([c, np.array(rows, dtype=float)])
+
+    @property
     def damper_b(self) -> np.ndarray:
         """(dampers, n) each damper's b, count expanded (CSV order)."""
         return np.array([dp.b for dp in self.dampers for _ in range(dp.count)]).reshape(-1, self.n)
@@ -649,12 +669,9 @@ def _excitation(deck: dk.Deck, base: Path, body: Body, notes: list[str]) -> Exci
 
 
 def exact_limits(system) -> list[str]:
-    """What keeps a scene from exact kinematics (the deck keys, and why): nothing, mostly."""
-    problems = []
-    if system.dampers:
-        problems.append('dampers: viscous dampers with analysis.kinematics = "exact" are not built in (their '
-                        'deformation rate turns with the body): use damping.rayleigh, or kinematics = "small"')
-    return problems
+    """What keeps a scene from exact kinematics (the deck keys, and why): nothing at present (the
+    dampers' rows turn with the body too); the one place a limit would be named."""
+    return []
 
 
 def arm_turns(excitation: Excitation) -> bool:

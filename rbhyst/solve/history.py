@@ -61,6 +61,7 @@ class Layout:
         n = len(coords)
         self.has_support = ex.has_support
         self.dampers = bool(system.dampers)  # their columns
+        self._turning = False
         # viscous work (and C v in the accelerations) with dampers or Rayleigh damping
         self.damped = self.dampers or getattr(system, "rayleigh", None) is not None
         names = list(base_columns(coords))
@@ -93,6 +94,10 @@ class Layout:
                 names += [f"d{k}_v_m_s", f"d{k}_f_N"]
             self._db = system.damper_b.T.copy()  # (n, dampers): deformation rates v . b
             self._dc = system.damper_c
+            # with exact kinematics their rows turn with the body (kinematics.damper_rows)
+            self._turning = system.kinematics == "exact"
+            self._dcount = np.array([dp.count for dp in system.dampers])
+            self._dcc = np.array([dp.c * dp.count for dp in system.dampers])
         # displacements are measured from the static equilibrium under gravity (seed section 2.2)
         self.origin = np.zeros(n) if getattr(system, "static", None) is None else system.static.q
         energy = list(ENERGY_COLUMNS)
@@ -150,7 +155,7 @@ class Layout:
             forces = turned_loads(forces, raw.d[:, self._rot], len(self.coordinates), self._rot)
         at[:] = forces - r
         if self.damped:
-            at -= raw.v @ self._ct
+            at -= self._viscous(raw)
         at *= self._minv
         if self._back is not None:
             for family in ("d", "v", "R", "at"):
@@ -190,7 +195,8 @@ class Layout:
         out[:, el.start:el.stop:2] = raw.u[:, self._expand]
         out[:, el.start + 1:el.stop:2] = raw.f[:, self._expand]
         if self.dampers:
-            dv = raw.v @ self._db
+            dv = raw.v @ self._db if not self._turning else np.repeat(
+                np.einsum("kdi,ki->kd", self._drows(raw), raw.v), self._dcount, axis=1)
             ds = self.slices["dampers"]
             out[:, ds.start:ds.stop:2] = dv
             out[:, ds.start + 1:ds.stop:2] = dv * self._dc
@@ -201,6 +207,24 @@ class Layout:
             out[:, en.start + 3] = raw.e[:, 3]
             error = error - raw.e[:, 3]
         out[:, en.stop - 1] = error
+
+    def _drows(self, raw: Raw) -> np.ndarray:
+        """(k, dampers, n) the dampers' rows at each row's configuration (exact kinematics)."""
+        from rbhyst.model.kinematics import damper_rows
+
+        return damper_rows(self.system, raw.d)
+
+    def _viscous(self, raw: Raw) -> np.ndarray:
+        """(k, n) the viscous force C v at each row: Rayleigh's and the dampers', whose rows turn
+        with the body where the kinematics are exact."""
+        if not self._turning:
+            return raw.v @ self._ct
+        rows = self._drows(raw)
+        rate = np.einsum("kdi,ki->kd", rows, raw.v)
+        out = np.einsum("d,kd,kdi->ki", self._dcc, rate, rows)
+        if self.system.rayleigh is not None:
+            out += raw.v @ self.system.rayleigh.matrix.T
+        return out
 
     def _table_space(self, raw: Raw, out: np.ndarray) -> np.ndarray:
         """``table`` for a body in space with exact kinematics (rbhyst.model.rotations): the kernels'
@@ -219,7 +243,7 @@ class Layout:
         at = body_loads(self.system.excitation.forces(raw.t), psi, n, self._axial) - r_b
         at[:, 3:] -= gyroscopic(self.system.mass, omega)
         if self.damped:
-            at -= raw.v @ self._ct
+            at -= self._viscous(raw)
         at *= self._minv
         turn = lambda x: np.einsum("kij,kj->ki", rm, x)  # body axes -> ground (kernel axes)
         d = out[:, self.slices["d"]]

@@ -233,7 +233,7 @@ class _FixedStepPlan(Plan):
         super().__init__(system, s, method)
         mass = system.mass
         self.minv = 1.0 / mass
-        self.cm = np.ascontiguousarray(system.C)
+        self.cm = np.ascontiguousarray(system.kernel_damping)  # (C, and turning dampers' rows: exact kinematics)
         self.damped = bool(np.any(self.cm != 0.0))
         self.bounds, self.substeps = system.excitation.substeps(s.dt, self.n_steps)
         k0 = system.K0
@@ -242,7 +242,7 @@ class _FixedStepPlan(Plan):
             h_c = s.dt / nsub
             level0 = min_level(system, s, method, h_c)
             # levels below level0 are never used (and may be singular for an extreme K0)
-            self.coef[int(nsub)] = np.stack([method.coefficients(mass, k0, self.cm, h_c / 2**max(lv, level0))
+            self.coef[int(nsub)] = np.stack([method.coefficients(mass, k0, self.cm[:system.n], h_c / 2**max(lv, level0))
                                              for lv in range(s.max_substep_level + 1)])
             self.level0[int(nsub)] = level0
         self.bvec = np.ascontiguousarray(system.bvec)

@@ -268,7 +268,7 @@ def integrate(system, t_out: np.ndarray, rtol: float = RTOL, pieces=None, max_st
     # M^-1 as a tuple: its length n is a constant of the compiled kernel (one compilation per n)
     minv = tuple(1.0 / system.mass)
     args = (minv, np.ascontiguousarray(system.bvec), system.kernel_axial, system.rotation_index, system.mult, np.ascontiguousarray(system.params),
-            np.ascontiguousarray(system.C))
+            np.ascontiguousarray(system.kernel_damping))
     work = (np.zeros((6, ne)), np.zeros((7, width)), np.zeros((16, width)), np.zeros((7, width)), np.zeros((4, max(system.excitation.width, ne))),
             np.zeros(NS + 1))
     tail = (rtol, atol, init, y0, 1e-6, int(max_steps), _A, _B, _C, _E3, _E5, _D, out_y, out_eu, out_ef, out_eh, info, *work)

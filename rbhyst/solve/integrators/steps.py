@@ -30,9 +30,9 @@ import math
 from numba import njit
 
 from rbhyst.solve.kernels.layout import (NEWTON_FAILED, W_A, W_AN, W_D, W_DN, W_PA, W_PB, W_Q, W_R, W_RN, W_V, W_VN, W_X,
-                                         W_Y)
+                                         W_Y, W_Z)
 from rbhyst.solve.kernels.elements import (arm_moment, bbt_sums, mat_row, row_dot, solve_in_place, start_rows,
-                                           substep_load, update_elements)
+                                           substep_load, turned_dampers, update_elements)
 from rbhyst.solve.kernels.layout import SPATIAL
 from rbhyst.solve.kernels.rotations import add_geometric, body_load, gyroscopic, rotation, turned
 from rbhyst.solve.integrators import central_difference, chang, kr_alpha, newmark
@@ -86,6 +86,11 @@ def chang_step(coef, lv, mass, minv, cm, damped, bvec, axial, rot, mult, params,
             y[i] = v[i] + 0.5 * h * a[i]
         for i in range(n):
             x[i] -= row_dot(cm, i, y, n)
+        if cm.shape[0] > n:  # dampers whose rows turn: their force beyond C0 v at the predicted end
+            z = w[W_Z]
+            for i in range(n):
+                z[i] = v[i] + h * a[i]
+            turned_dampers(cm, rot, d, dn, z, 0, x, -1.0, n)
         for i in range(n):
             an[i] = mat_row(coef, lv, MC_INV, i, x, n)
     else:
@@ -136,6 +141,14 @@ def kr_alpha_step(coef, lv, mass, minv, cm, damped, bvec, axial, rot, mult, para
         for i in range(3, 6):
             x[i] -= gyroscopic(mass, vn, i)
             y[i] -= gyroscopic(mass, v, i)
+    if damped and cm.shape[0] > n:
+        # dampers whose rows turn: their force beyond C0 v, weighted between the step's ends as the
+        # restoring force is (the scheme's C v acts at the velocity at t + (1 - af) h)
+        z = w[W_Z]
+        for i in range(n):
+            z[i] = v[i] + h * a[i]
+        turned_dampers(cm, rot, d, dn, z, 0, x, -1.0, n)
+        turned_dampers(cm, rot, d, d, v, 0, y, -1.0, n)
     for i in range(n):
         an[i] = mat_row(coef, lv, X_NEW, i, x, n) + mat_row(coef, lv, X_OLD, i, y, n) - mat_row(coef, lv, A_A, i, a, n)
     if damped:
@@ -213,6 +226,8 @@ def newmark_step(mass, cm, damped, bvec, axial, rot, mult, params, st, cur, w, w
                 g[i] += row_dot(cm, i, z, n)
                 for k in range(n):
                     wm[i, k] += cv * cm[i, k]
+            if cm.shape[0] > n:  # dampers whose rows turn (their share of the Jacobian beyond C0 left out)
+                turned_dampers(cm, rot, d, dn, z, 0, g, 1.0, n)
         # the correction x = -K^-1 g, in g
         for i in range(n):
             g[i] = -g[i]

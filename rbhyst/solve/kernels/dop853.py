@@ -18,6 +18,7 @@ from rbhyst.solve.kernels.dop853_layout import (NS, R_ELEMENT, R_EVENTS, R_FEV, 
 from rbhyst.model.signals import HALF_SINE, HAVERSINE, ROW_SIZE as ROW, SAWTOOTH, SINE
 from rbhyst.model.vrm import branch_eval, branch_row
 from rbhyst.solve.kernels.layout import SPATIAL
+from rbhyst.solve.kernels.elements import turned_dampers
 from rbhyst.solve.kernels.rotations import arm, attitude_rate, centripetal, rotation, turn_moments
 
 
@@ -186,12 +187,12 @@ def _rhs(t, y, k, brk, pcoef, sig, minv, bvec, axial, rot, mult, params, cm, s, 
             for e in range(bvec.shape[0]):
                 acc += mf[e] * bvec[e, i]
         r[i] = acc
-    _finish_rhs(y, minv, cm, load, r, cv, dy, n)
+    _finish_rhs(y, minv, cm, rot, load, r, cv, dy, n)
     return -1
 
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
-def _finish_rhs(y, minv, cm, load, r, cv, dy, n):
+def _finish_rhs(y, minv, cm, rot, load, r, cv, dy, n):
     """dy = (v, M^-1 (p - R - C v), p . v, v . C v) once p (in load) and R are known; dy[:n] is
     left to the caller where it is not v."""
     for i in range(n):
@@ -200,6 +201,8 @@ def _finish_rhs(y, minv, cm, load, r, cv, dy, n):
         for j in range(1, n):
             acc += cm[i, j] * y[n + j]
         cv[i] = acc
+    if cm.shape[0] > n:
+        turned_dampers(cm, rot, y, y, y, n, cv, 1.0, n)
     for i in range(n):
         dy[n + i] = minv[i] * (load[i] - r[i] - cv[i])
     power = load[0] * y[n]
@@ -250,7 +253,7 @@ def _rhs_spatial(t, y, k, brk, pcoef, sig, minv, bvec, axial, mult, params, cm, 
     r[3] += (j2 - j1) * w1 * w2
     r[4] += (j0 - j2) * w2 * w0
     r[5] += (j1 - j0) * w0 * w1
-    _finish_rhs(y, minv, cm, load, r, cv, dy, n)
+    _finish_rhs(y, minv, cm, SPATIAL, load, r, cv, dy, n)
     d0, d1, d2 = attitude_rate(y[3], y[4], y[5], y[n + 3], y[n + 4], y[n + 5])
     dy[3] = d0
     dy[4] = d1

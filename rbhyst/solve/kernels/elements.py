@@ -371,3 +371,57 @@ def solve_in_place(a, b, n):
         for j in range(i + 1, n):
             acc -= a[i, j] * b[j]
         b[i] = acc / a[i, i]
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def turned_dampers(cm, rot, q0, q, v, voff, out, sign, n):
+    """out[i] += sign sum_d c_d (b_d(q) (b_d(q) . v) - b_d0 (b_d0 . v)): the viscous dampers' force
+    beyond C0 v (cm's first n rows, the dampers at rest and Rayleigh's), where their rows turn
+    with the body (exact kinematics; v = v[voff:voff + n]). Each damper is two more rows of cm
+    (rbhyst.model.system.System.kernel_damping): in the plane (b1, b2, b3) and (c, c count, 0),
+    its row b_d(q) = (b1, b2, b3 cos(theta) - c sin(theta)); in space (d, x') and (d', c count,
+    0, 0), b_d(q) = (d, x' x R^T d') at the attitude R(q0) exp(q - q0) (rbhyst.model.rotations)."""
+    nd = (cm.shape[0] - n) // 2
+    if nd <= 0:
+        return
+    sn = 0.0
+    cs = 1.0
+    rm = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
+    if rot == SPATIAL:
+        rm = turned(q0, q)
+    elif rot >= 0:
+        sn = math.sin(q[rot])
+        cs = math.cos(q[rot])
+    for k in range(nd):
+        ra = n + 2 * k
+        rb = ra + 1
+        if rot == SPATIAL:
+            d0, d1, d2 = cm[ra, 0], cm[ra, 1], cm[ra, 2]
+            x0, x1, x2 = cm[ra, 3], cm[ra, 4], cm[ra, 5]
+            c0, c1, c2 = cm[rb, 0], cm[rb, 1], cm[rb, 2]
+            ct = cm[rb, 3]
+            a0 = rm[0] * c0 + rm[3] * c1 + rm[6] * c2
+            a1 = rm[1] * c0 + rm[4] * c1 + rm[7] * c2
+            a2 = rm[2] * c0 + rm[5] * c1 + rm[8] * c2
+            b3, b4, b5 = x1 * a2 - x2 * a1, x2 * a0 - x0 * a2, x0 * a1 - x1 * a0
+            r3, r4, r5 = x1 * c2 - x2 * c1, x2 * c0 - x0 * c2, x0 * c1 - x1 * c0  # at rest
+            tr = d0 * v[voff] + d1 * v[voff + 1] + d2 * v[voff + 2]
+            s = tr + b3 * v[voff + 3] + b4 * v[voff + 4] + b5 * v[voff + 5]
+            s0 = tr + r3 * v[voff + 3] + r4 * v[voff + 4] + r5 * v[voff + 5]
+            f = sign * ct
+            out[0] += f * d0 * (s - s0)
+            out[1] += f * d1 * (s - s0)
+            out[2] += f * d2 * (s - s0)
+            out[3] += f * (b3 * s - r3 * s0)
+            out[4] += f * (b4 * s - r4 * s0)
+            out[5] += f * (b5 * s - r5 * s0)
+        elif rot >= 0:
+            ct = cm[rb, 1]
+            s0 = 0.0
+            for i in range(n):
+                s0 += cm[ra, i] * v[voff + i]
+            brot = cm[ra, rot] * cs - cm[rb, 0] * sn
+            s = s0 + (brot - cm[ra, rot]) * v[voff + rot]
+            for i in range(n):
+                bi = brot if i == rot else cm[ra, i]
+                out[i] += sign * ct * (bi * s - cm[ra, i] * s0)

@@ -19,8 +19,9 @@ import math
 from numba import njit
 
 from rbhyst.solve.integrators.steps import take_step
-from rbhyst.solve.kernels.layout import (E_HYST, E_IN, E_KIN, E_VISC, F, I_BRANCH, I_DISP, I_ELEMENT, I_OMEGA, I_STATUS, I_STIFFNESS, I_TIME, NEWTON_FAILED, NONFINITE, NOT_CONVERGED, OK, OVERFLOW, S, SMALL, SPATIAL, U, UNRESOLVED, W_A, W_AN, W_D, W_DN, W_PA, W_PB, W_Q, W_SA, W_SD, W_SV, W_V, W_VN, W_Z, X_CUR, X_E_HYST, X_E_IN, X_E_VISC, X_ITER, X_LEVEL, X_LEVEL_USED, X_OMEGA_DT2, X_Q, X_STEPS, X_SUBSTEPS)
-from rbhyst.solve.kernels.elements import copy_rows, copy_vector, omega_squared, omega_squared_exact, row_dot
+from rbhyst.solve.kernels.layout import (E_HYST, E_IN, E_KIN, E_VISC, F, I_BRANCH, I_DISP, I_ELEMENT, I_OMEGA, I_STATUS, I_STIFFNESS, I_TIME, NEWTON_FAILED, NONFINITE, NOT_CONVERGED, OK, OVERFLOW, S, SMALL, SPATIAL, U, UNRESOLVED, W_A, W_AN, W_D, W_DN, W_PA, W_PB, W_Q, W_SA, W_SD, W_SV, W_V, W_VN, W_X, W_Z, X_CUR, X_E_HYST, X_E_IN, X_E_VISC, X_ITER, X_LEVEL, X_LEVEL_USED, X_OMEGA_DT2, X_Q, X_STEPS, X_SUBSTEPS)
+from rbhyst.solve.kernels.elements import (copy_rows, copy_vector, omega_squared, omega_squared_exact, row_dot,
+                                           turned_dampers)
 from rbhyst.solve.kernels.rotations import compose
 
 
@@ -148,6 +149,13 @@ def run_chunk(method, coef, mass, minv, cm, damped, bvec, axial, rot, mult, para
                     acc = row_dot(cm, 0, z, n) * (dn[0] - d[0])
                     for i in range(1, n):
                         acc += row_dot(cm, i, z, n) * (dn[i] - d[i])
+                    if cm.shape[0] > n:  # dampers whose rows turn, at the step's end
+                        wx = w[W_X]
+                        for i in range(n):
+                            wx[i] = 0.0
+                        turned_dampers(cm, rot, d, dn, z, 0, wx, 1.0, n)
+                        for i in range(n):
+                            acc += wx[i] * (dn[i] - d[i])
                     e_visc += 0.5 * acc
                 if rot == SPATIAL:  # the step's turn, composed on the body's attitude
                     compose(d, dn)
