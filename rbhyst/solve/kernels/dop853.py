@@ -88,6 +88,39 @@ def _turn_arm(load, y, rot, n):
     load[rot] += -2.0 * half * half * load[n] - math.sin(y[rot]) * load[n + 1]
 
 
+# a body in space with exact kinematics: each a function of its own, compiled once (not inlined
+# at every call site of the plane's)
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _u_spatial(bvec, axial, e, y):
+    """Element e's deformation d . (u + R x - x) at y (rbhyst.solve.kernels.rotations.arm)."""
+    t = arm(axial, e, rotation(y[3], y[4], y[5]))
+    return bvec[e, 0] * y[0] + bvec[e, 1] * y[1] + bvec[e, 2] * y[2] + t[0]
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _v_spatial(bvec, axial, e, y):
+    """Element e's deformation rate b_e(q) . v, v = (u', omega) = y[6:12]."""
+    t = arm(axial, e, rotation(y[3], y[4], y[5]))
+    return (bvec[e, 0] * y[6] + bvec[e, 1] * y[7] + bvec[e, 2] * y[8]
+            + t[1] * y[9] + t[2] * y[10] + t[3] * y[11])
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _a_spatial(bvec, axial, e, y, f):
+    """The derivative of _v_spatial: b_e(q) . v' and the point's centripetal acceleration along the line."""
+    t = arm(axial, e, rotation(y[3], y[4], y[5]))
+    return (bvec[e, 0] * f[6] + bvec[e, 1] * f[7] + bvec[e, 2] * f[8]
+            + t[1] * f[9] + t[2] * f[10] + t[3] * f[11] + centripetal(axial, e, t, y[9], y[10], y[11]))
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _g_spatial(F, y_old, x, bvec, axial, e):
+    """_v_spatial on the dense output at x."""
+    t = arm(axial, e, rotation(_dense(F, y_old, x, 3), _dense(F, y_old, x, 4), _dense(F, y_old, x, 5)))
+    w = bvec[e, 0] * _dense(F, y_old, x, 6) + bvec[e, 1] * _dense(F, y_old, x, 7) + bvec[e, 2] * _dense(F, y_old, x, 8)
+    return w + t[1] * _dense(F, y_old, x, 9) + t[2] * _dense(F, y_old, x, 10) + t[3] * _dense(F, y_old, x, 11)
+
+
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
 def _bdot(bvec, e, y, first, n):
     """b_e . y[first:first + n], summed from the first term (y at 0: q; at n: v)."""
@@ -103,8 +136,7 @@ def _u_el(bvec, axial, rot, e, y, n):
     b_e . q with b_rot sin(theta) + axial_e (cos(theta) - 1) for b_rot theta
     (rbhyst.solve.kernels.elements.update_elements); in space (rot = SPATIAL) d . (u + R x - x)."""
     if rot == SPATIAL:
-        t = arm(axial, e, rotation(y[3], y[4], y[5]))
-        return bvec[e, 0] * y[0] + bvec[e, 1] * y[1] + bvec[e, 2] * y[2] + t[0]
+        return _u_spatial(bvec, axial, e, y)
     if rot < 0:
         return _bdot(bvec, e, y, 0, n)
     acc = 0.0
@@ -119,9 +151,7 @@ def _u_el(bvec, axial, rot, e, y, n):
 def _v_el(bvec, axial, rot, e, y, n):
     """Element e's deformation rate b_e(q) . v at the state y = (q, v, ...)."""
     if rot == SPATIAL:
-        t = arm(axial, e, rotation(y[3], y[4], y[5]))
-        return (bvec[e, 0] * y[n] + bvec[e, 1] * y[n + 1] + bvec[e, 2] * y[n + 2]
-                + t[1] * y[n + 3] + t[2] * y[n + 4] + t[3] * y[n + 5])
+        return _v_spatial(bvec, axial, e, y)
     if rot < 0:
         return _bdot(bvec, e, y, n, n)
     acc = 0.0
@@ -137,10 +167,7 @@ def _a_el(bvec, axial, rot, e, y, f, n):
     b_e(q) . a, plus omega^2 d2u_e/dtheta2 with exact kinematics (in space, the point's
     centripetal acceleration along the line)."""
     if rot == SPATIAL:
-        t = arm(axial, e, rotation(y[3], y[4], y[5]))
-        return (bvec[e, 0] * f[n] + bvec[e, 1] * f[n + 1] + bvec[e, 2] * f[n + 2]
-                + t[1] * f[n + 3] + t[2] * f[n + 4] + t[3] * f[n + 5]
-                + centripetal(axial, e, t, y[n + 3], y[n + 4], y[n + 5]))
+        return _a_spatial(bvec, axial, e, y, f)
     if rot < 0:
         return _bdot(bvec, e, f, n, n)
     acc = 0.0
@@ -278,11 +305,7 @@ def _dense(F, y_old, x, i):
 def _g_dense(F, y_old, x, bvec, axial, rot, e, s, n):
     """s_e (b_e(q) . v) on the dense output: positive while the element moves along its branch."""
     if rot == SPATIAL:
-        t = arm(axial, e, rotation(_dense(F, y_old, x, 3), _dense(F, y_old, x, 4), _dense(F, y_old, x, 5)))
-        w = bvec[e, 0] * _dense(F, y_old, x, n) + bvec[e, 1] * _dense(F, y_old, x, n + 1) \
-            + bvec[e, 2] * _dense(F, y_old, x, n + 2)
-        w += t[1] * _dense(F, y_old, x, n + 3) + t[2] * _dense(F, y_old, x, n + 4) + t[3] * _dense(F, y_old, x, n + 5)
-        return s * w
+        return s * _g_spatial(F, y_old, x, bvec, axial, e)
     if rot < 0:
         w = bvec[e, 0] * _dense(F, y_old, x, n)
         for i in range(1, n):

@@ -82,6 +82,51 @@ def sym_max_eig(a, n):
     return top
 
 
+@njit(cache=True, error_model="numpy", _nrt=False)
+def update_spatial(bvec, axial, mult, params, q0, q, st, cur, kpeak, r, bq):
+    """update_elements for a body in space with exact kinematics (rot = SPATIAL): the rows at the
+    attitude R(q0[3:6]) exp(q[3:6] - q0[3:6]) (rotations.element_row). Returns (ok, bad, work)."""
+    n = len(r)
+    for i in range(n):
+        r[i] = 0.0
+    work = 0.0
+    rm = turned(q0, q)
+    nxt = 1 - cur
+    for e in range(bvec.shape[0]):
+        u = element_row(bvec, axial, e, rm, q, bq)
+        f, s, g, k, a, kstart, w, ok = vrm_update(params, e, st[cur, e, U], st[cur, e, F], st[cur, e, S],
+                                                  st[cur, e, G], st[cur, e, K], st[cur, e, A], u)
+        if not ok:
+            return False, e, work
+        st[nxt, e, U] = u
+        st[nxt, e, F] = f
+        st[nxt, e, S] = s
+        st[nxt, e, G] = g
+        st[nxt, e, K] = k
+        st[nxt, e, A] = a
+        kpeak[e, 0] = max(kstart, k)
+        kpeak[e, 1] = k
+        work += mult[e] * w
+        mf = mult[e] * f
+        for i in range(n):
+            r[i] += mf * bq[e, i]
+    return True, -1, work
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def start_spatial(bvec, axial, mult, st, cur, q, r, bq):
+    """start_rows for a body in space with exact kinematics."""
+    n = len(r)
+    for i in range(n):
+        r[i] = 0.0
+    rm = rotation(q[3], q[4], q[5])
+    for e in range(bvec.shape[0]):
+        mf = mult[e] * st[cur, e, 1]
+        element_row(bvec, axial, e, rm, q, bq)
+        for i in range(n):
+            r[i] += mf * bq[e, i]
+
+
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
 def update_elements(bvec, axial, rot, mult, params, q0, q, st, cur, kpeak, r, bq, n):
     """Elements at the new configuration q (n,) (eqs. 5-11): u_e = b_e . q, R = sum mult b f.
@@ -102,6 +147,9 @@ def update_elements(bvec, axial, rot, mult, params, q0, q, st, cur, kpeak, r, bq
     converge to the same tolerance); rot = SMALL: the seed's rows, bq untouched.
     Returns (ok, bad element, work of all element forces over the step, geometric stiffness).
     """
+    if rot == SPATIAL:  # one call, compiled once: the plane's kernels carry none of it inlined
+        ok, bad, work = update_spatial(bvec, axial, mult, params, q0, q, st, cur, kpeak, r, bq)
+        return ok, bad, work, 0.0
     for i in range(n):
         r[i] = 0.0
     work = 0.0
@@ -109,18 +157,13 @@ def update_elements(bvec, axial, rot, mult, params, q0, q, st, cur, kpeak, r, bq
     sn = 0.0
     cs = 1.0
     cm1 = 0.0
-    rm = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
     if rot >= 0:
         sn = math.sin(q[rot])
         cs = math.cos(q[rot])
         half = math.sin(0.5 * q[rot])
         cm1 = -2.0 * half * half  # cos - 1 without cancellation
-    elif rot == SPATIAL:
-        rm = turned(q0, q)
     for e in range(bvec.shape[0]):
-        if rot == SPATIAL:
-            u = element_row(bvec, axial, e, rm, q, bq)
-        elif rot >= 0:
+        if rot >= 0:
             u = 0.0
             for i in range(n):
                 if i != rot:
@@ -152,9 +195,6 @@ def update_elements(bvec, axial, rot, mult, params, q0, q, st, cur, kpeak, r, bq
             for i in range(n):
                 r[i] += mf * bq[e, i]
             kgeo -= mf * (bvec[e, rot] * sn + axial[e] * cs)
-        elif rot == SPATIAL:
-            for i in range(n):
-                r[i] += mf * bq[e, i]
         else:
             for i in range(n):
                 r[i] += mf * bvec[e, i]
@@ -165,23 +205,18 @@ def update_elements(bvec, axial, rot, mult, params, q0, q, st, cur, kpeak, r, bq
 def start_rows(bvec, axial, rot, mult, st, cur, q, r, bq, n):
     """r (n,) = R at the start of a step, sum mult f b_e(q) from the forces in st[cur] (the
     rows at q where the kinematics are exact, rot != SMALL; bq: work space there)."""
+    if rot == SPATIAL:
+        start_spatial(bvec, axial, mult, st, cur, q, r, bq)
+        return
     for i in range(n):
         r[i] = 0.0
     sn = 0.0
     cs = 1.0
-    rm = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0)
     if rot >= 0:
         sn = math.sin(q[rot])
         cs = math.cos(q[rot])
-    elif rot == SPATIAL:
-        rm = rotation(q[3], q[4], q[5])
     for e in range(bvec.shape[0]):
         mf = mult[e] * st[cur, e, 1]
-        if rot == SPATIAL:
-            element_row(bvec, axial, e, rm, q, bq)
-            for i in range(n):
-                r[i] += mf * bq[e, i]
-            continue
         for i in range(n):
             if i == rot:
                 r[i] += mf * (bvec[e, i] * cs - axial[e] * sn)
