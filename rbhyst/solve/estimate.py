@@ -67,8 +67,8 @@ AT_REST = 1e-9
 #: that matters (the torsion a symmetric body's rocking couples in with exact rotations, a cross
 #: acceleration): its error is stated against this fraction of the scale, so that a tiny
 #: quantity's large relative error is reported as what it is worth, and a small column that is
-#: badly wrong still is (50 % of a column at 1 % of the scale reads 10 %)
-NEGLIGIBLE = 0.05
+#: badly wrong still is (50 % of a column at 0.1 % of the scale reads 5 %)
+NEGLIGIBLE = 0.01
 #: the spectra's error is estimated on runs of at most this many compute steps (the reference
 #: is then computed at each of them, as the run's spectra were driven)
 SPECTRA_ROWS = 500_000
