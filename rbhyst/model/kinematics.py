@@ -111,38 +111,22 @@ def exact_twin(system):
         return system
     if system.coordinates == SPACE:
         return _exact_twin_space(system)
-    keys, rows, elements = {}, [], []
-    for el in system.elements:
-        c = axial_offset(el.x[0], el.x[1], np.radians(el.angle_deg))
-        key = (el.row, round(c / 1e-12))
-        if key not in keys:
-            keys[key] = len(rows)
-            rows.append((el.row, c))
-        elements.append(replace(el, row=keys[key]))
-    mult = np.zeros(len(rows))
-    for el in elements:
-        mult[el.row] += el.count
-    old = [r for r, _ in rows]
+    elements, mult, old, arms = _split_rows(system, lambda el: axial_offset(el.x[0], el.x[1],
+                                                                           np.radians(el.angle_deg)))
     excitation = replace(system.excitation, follow=arm_turns(system.excitation))
-    if system.static is not None:  # the weight enters again with the exact equilibrium
-        excitation = replace(excitation, constant=(0.0,) * system.n)
-    return replace(system, bvec=system.bvec[old], mult=mult, params=system.params[old], k0=system.k0[old],
-                   k_reversal=system.k_reversal[old], elements=tuple(elements), static=None, excitation=excitation,
-                   kinematics="exact", axial=np.array([c for _, c in rows]))
+    return _twin(system, elements, mult, old, excitation, np.array(arms))
 
 
-def _exact_twin_space(system):
-    """exact_twin of a body in space: rows split where their points or lines differ (each row's
-    point and line in the kernels' rotation axes, then the force point, rbhyst.model.rotations)."""
+def _split_rows(system, arm_of):
+    """The elements regrouped into rows that deform alike with exact kinematics: those of a row
+    whose ``arm_of`` (their offset along their line in the plane, point and line in space) differ
+    part. Returns (the elements renumbered, each row's multiplicity, its old row, its arm)."""
     from dataclasses import replace
 
-    from rbhyst.model.system import arm_turns
-
-    p = np.eye(3) if system.frame is None else np.asarray(system.frame)[3:, 3:]
     keys, rows, elements = {}, [], []
     for el in system.elements:
-        arm = np.concatenate([np.asarray(el.x, dtype=float) @ p, np.asarray(el.direction, dtype=float) @ p])
-        key = (el.row, *np.round(arm / 1e-12).astype(np.int64).tolist())
+        arm = arm_of(el)
+        key = (el.row, *np.round(np.atleast_1d(arm) / 1e-12).astype(np.int64).tolist())
         if key not in keys:
             keys[key] = len(rows)
             rows.append((el.row, arm))
@@ -150,17 +134,36 @@ def _exact_twin_space(system):
     mult = np.zeros(len(rows))
     for el in elements:
         mult[el.row] += el.count
-    old = [r for r, _ in rows]
-    excitation = system.excitation
-    if arm_turns(excitation):
-        excitation = replace(excitation, follow=True, turning={k: tuple(float(v) for v in p.T[:, i])
-                                                               for i, k in enumerate(("p1", "p2", "p3"))})
-    if system.static is not None:  # the weight enters again with the exact equilibrium
+    return elements, mult, [r for r, _ in rows], [a for _, a in rows]
+
+
+def _twin(system, elements, mult, old, excitation, axial):
+    """The exact twin of ``system`` with its rows regrouped (_split_rows), before any static
+    equilibrium (the weight enters again with the exact one)."""
+    from dataclasses import replace
+
+    if system.static is not None:
         excitation = replace(excitation, constant=(0.0,) * system.n)
-    axial = np.concatenate([a for _, a in rows] + [p.T @ np.asarray(system.excitation.point, dtype=float)])
     return replace(system, bvec=system.bvec[old], mult=mult, params=system.params[old], k0=system.k0[old],
                    k_reversal=system.k_reversal[old], elements=tuple(elements), static=None, excitation=excitation,
                    kinematics="exact", axial=axial)
+
+
+def _exact_twin_space(system):
+    """exact_twin of a body in space: rows split where their points or lines differ (each row's
+    point and line in the kernels' rotation axes, then the force point, rbhyst.model.rotations)."""
+    from dataclasses import replace
+
+    from rbhyst.model.system import arm_turns, space_turning
+
+    p = np.eye(3) if system.frame is None else np.asarray(system.frame)[3:, 3:]
+    elements, mult, old, arms = _split_rows(system, lambda el: np.concatenate(
+        [np.asarray(el.x, dtype=float) @ p, np.asarray(el.direction, dtype=float) @ p]))
+    excitation = system.excitation
+    if arm_turns(excitation):
+        excitation = replace(excitation, follow=True, turning=space_turning(p))
+    axial = np.concatenate(arms + [p.T @ np.asarray(system.excitation.point, dtype=float)])
+    return _twin(system, elements, mult, old, excitation, axial)
 
 
 def damper_rows(system, q: np.ndarray) -> np.ndarray:

@@ -674,6 +674,12 @@ def exact_limits(system) -> list[str]:
     return []
 
 
+def space_turning(p: np.ndarray) -> dict[str, tuple[float, ...]]:
+    """Excitation.turning of a body in space whose kernels' rotation axes are the columns of p:
+    each force signal's components along them (the kernels turn its arm)."""
+    return {k: tuple(float(v) for v in p.T[:, i]) for i, k in enumerate(("p1", "p2", "p3"))}
+
+
 def arm_turns(excitation: Excitation) -> bool:
     """Whether p1, p2 (or p3) act away from G: with exact kinematics their moment arm turns with the body."""
     return any(abs(x) > 0.0 for x in excitation.point) and any(
@@ -930,8 +936,7 @@ def assemble_space(deck: dk.Deck, base: Path, run: bool = True) -> System:
     p = np.eye(3) if frame is None else frame[3:, 3:]
     axial = np.concatenate([axial, p.T @ np.asarray(excitation.point, dtype=float)])
     if arm_turns(excitation):  # forces away from G: their three components (rotation axes) follow
-        excitation = replace(excitation, follow=True, turning={k: tuple(float(v) for v in p.T[:, i])
-                                                                for i, k in enumerate(("p1", "p2", "p3"))})
+        excitation = replace(excitation, follow=True, turning=space_turning(p))
     system = _system(deck, body, mass, rows, names, mult, elements, excitation, notes, dampers, weight,
                      coordinates=SPACE, frame=frame, kinematics="exact", axial=axial)
     limits = exact_limits(system)
