@@ -98,14 +98,14 @@ def loads_at(p: np.ndarray, q: np.ndarray, n: int, rot: int, axial: np.ndarray |
 def exact_twin(system):
     """The same scene with exact kinematics: each kernel row split where its elements' points lie
     differently along their line of action (they deform alike only to first order), before
-    any static equilibrium (the exact one differs). None where exact kinematics do not cover
-    the scene (rbhyst.model.system.exact_limits says what)."""
+    any static equilibrium (the exact one differs). None for a body that is neither the plane's
+    nor one in space (exact kinematics are built for those)."""
     from dataclasses import replace
 
     from rbhyst.model.coordinates import PLANE, SPACE
-    from rbhyst.model.system import arm_turns, axial_offset, exact_limits
+    from rbhyst.model.system import arm_turns, axial_offset
 
-    if system.coordinates not in (PLANE, SPACE) or exact_limits(system):
+    if system.coordinates not in (PLANE, SPACE):
         return None
     if system.kinematics == "exact":
         return system

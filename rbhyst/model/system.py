@@ -668,12 +668,6 @@ def _excitation(deck: dk.Deck, base: Path, body: Body, notes: list[str]) -> Exci
     return Excitation(point=point, duration=signals.duration, **signals.read)
 
 
-def exact_limits(system) -> list[str]:
-    """What keeps a scene from exact kinematics (the deck keys, and why): nothing at present (the
-    dampers' rows turn with the body too); the one place a limit would be named."""
-    return []
-
-
 def space_turning(p: np.ndarray) -> dict[str, tuple[float, ...]]:
     """Excitation.turning of a body in space whose kernels' rotation axes are the columns of p:
     each force signal's components along them (the kernels turn its arm)."""
@@ -817,8 +811,6 @@ def assemble(deck: dk.Deck, base: Path, run: bool = True) -> System:
         weight = body.mass * np.array([deck.body.gravity[0], deck.body.gravity[1], 0.0])
     system = _system(deck, body, mass, rows, names, mult, elements, excitation, notes, dampers, weight,
                      kinematics="exact" if exact else "small", axial=axial if exact else None)
-    if exact and exact_limits(system):
-        raise InputError(exact_limits(system))
     if exact and arm_turns(excitation):
         system = replace(system, excitation=replace(excitation, follow=True))
     return system
@@ -937,9 +929,5 @@ def assemble_space(deck: dk.Deck, base: Path, run: bool = True) -> System:
     axial = np.concatenate([axial, p.T @ np.asarray(excitation.point, dtype=float)])
     if arm_turns(excitation):  # forces away from G: their three components (rotation axes) follow
         excitation = replace(excitation, follow=True, turning=space_turning(p))
-    system = _system(deck, body, mass, rows, names, mult, elements, excitation, notes, dampers, weight,
-                     coordinates=SPACE, frame=frame, kinematics="exact", axial=axial)
-    limits = exact_limits(system)
-    if limits:
-        raise InputError(limits)
-    return system
+    return _system(deck, body, mass, rows, names, mult, elements, excitation, notes, dampers, weight,
+                   coordinates=SPACE, frame=frame, kinematics="exact", axial=axial)

@@ -30,7 +30,6 @@ def kinematics_summary(result, settings) -> dict:
     """summary.json's ``kinematics``: the model, the largest rotation, and the difference from
     exact kinematics per column where the rotation makes it matter (see the module docstring)."""
     from rbhyst.model.kinematics import exact_twin
-    from rbhyst.model.system import exact_limits
 
     system = result.system
     rot = next((j for j, c in enumerate(system.coordinates) if c.rotation), None)
@@ -70,7 +69,7 @@ def kinematics_summary(result, settings) -> dict:
     twin = exact_twin(system)
     if twin is None:
         out["difference"] = None
-        out["method"] = "not computed: " + "; ".join(exact_limits(system))
+        out["method"] = "not computed: exact kinematics are built for the plane and the body in space only"
         return out
     from rbhyst.solve.estimate import column_errors
     from rbhyst.solve.plan import prepare
