@@ -51,11 +51,12 @@ def analyse(system: System, settings: Settings, keep: bool = True, csv=None, pla
         planned = planned or plan(system, settings)
         if keep:
             planned.check_size(keep=True)
-        result = planned.run(keep=keep, csv=csv, progress=progress)
+        companion = _companion(planned) if settings.estimate else None
+        result = planned.run(keep=keep, csv=csv, progress=progress, tap=companion and companion[1])
         if settings.estimate:
             if progress is not None:
                 progress(0, 0, "estimating the error")
-            result.accuracy = estimate(result, settings)
+            result.accuracy = estimate(result, settings, companion=companion)
     result.notes, result.warnings = diagnose(result)
     if result.spectra is not None:
         from rbhyst.solve.located import unfinished_note
@@ -77,3 +78,13 @@ def run_deck(deck, keep: bool = True, **options) -> Result:
     """A deck's analysis in memory (``options``: integrator, dt, tolerance, estimate)."""
     system, settings = scene(deck_of(deck), **options)
     return analyse(system, settings, keep=keep)
+
+
+def _companion(planned):
+    """(plan, tap) where the run's error can come from its companion (rbhyst.solve.companion)."""
+    from rbhyst.solve import companion
+    from rbhyst.solve.plan import FixedStepPlan
+
+    if not isinstance(planned, FixedStepPlan) or companion.unfit(planned) is not None:
+        return None
+    return planned, companion.Accelerations(planned)

@@ -15,6 +15,7 @@ import numpy as np
 
 from rbhyst.model.coordinates import PLANE, columns, translations
 from rbhyst.model.kinematics import SPATIAL, point_motion_exact, turned_loads
+from rbhyst.solve.kernels.layout import SMALL
 from rbhyst.model.points import point_columns, point_motion
 
 
@@ -163,6 +164,30 @@ class Layout:
                 block[:] = block @ self._back
         self._rest(raw, out, at)
         return out
+
+    def difference(self, dd: np.ndarray, dv: np.ndarray, df: np.ndarray) -> np.ndarray:
+        """(rows, k) the change of every estimate column (estimate_columns) that changes of the
+        coordinates, velocities and element forces (dd, dv, df; the kernels' rows) make at the
+        same times: the table is linear in them with the seed's small rotations (the load, the
+        support and the origin cancel). What the error estimate's companion compares
+        (rbhyst.solve.companion)."""
+        assert self._rot == SMALL, "the table is linear in the state only with small rotations"
+        dr = df @ self._rb
+        dat = -dr
+        if self.damped:
+            dat -= dv @ self._ct
+        dat *= self._minv
+        if self._back is not None:
+            dd, dr, dat = dd @ self._back, dr @ self._back, dat @ self._back
+        blocks = {"d": dd, "at": dat, "R": dr}
+        cols = [blocks[fam][:, j] for fam in ("d", "at", "R") for j in range(len(self.coordinates))]
+        moving = translations(self.coordinates)
+        for _, x in self.points:
+            motion = point_motion(dd, dat, x, coordinates=self.coordinates)
+            cols += [motion[:, r] for r in range(len(moving))]
+            cols += [motion[:, len(moving) + r] for r in range(len(moving))]
+        cols += [df[:, row] for row in self._expand]
+        return np.column_stack(cols)
 
     def _rest(self, raw: Raw, out: np.ndarray, at: np.ndarray, omega=None) -> None:
         """The columns after G's motion, resultant and total acceleration (in the deck's axes in

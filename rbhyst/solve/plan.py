@@ -153,7 +153,7 @@ def prepare(system: System, s: Settings) -> "Plan":
         raise InputError(f"output.every: {s.every} is more than the {n_steps} steps of the analysis")
     if method.solve is not None:
         return Plan(system, s, method)
-    return _FixedStepPlan(system, s, method)
+    return FixedStepPlan(system, s, method)
 
 
 #: more compute steps than this is not an analysis anyone means (hours of time stepping)
@@ -215,14 +215,16 @@ class Plan:
                     f"{SMALL_CSV_BYTES / 1e6:.0f} MB (peaks, extremes and spectra still see every step)"]
         return []
 
-    def run(self, keep: bool = True, csv=None, compare_every: int | None = None, progress=None) -> Result:
-        """``progress(done, total, label)``, if given, hears how far the run is."""
+    def run(self, keep: bool = True, csv=None, compare_every: int | None = None, progress=None,
+            tap=None) -> Result:
+        """``progress(done, total, label)``, if given, hears how far the run is (``tap``: see
+        FixedStepPlan.run)."""
         if progress is not None:
             progress(0, 0, f"{self.settings.integrator}: adaptive integration")
         return self.method.solve(self.system, self.settings, keep=keep, csv=csv)
 
 
-class _FixedStepPlan(Plan):
+class FixedStepPlan(Plan):
     """A fixed-step method in the compiled loop (rbhyst.solve.kernels.loop).
 
     Each output step k is split into ``substeps[k]`` compute steps where a signal needs it
@@ -315,39 +317,62 @@ class _FixedStepPlan(Plan):
             for k in range(int(lo), int(hi), chunk):
                 yield k, min(chunk, int(hi) - k), int(nsub)
 
-    def run(self, keep: bool = True, csv=None, compare_every: int | None = None, progress=None) -> Result:
+    def start_row(self, x: np.ndarray, st: np.ndarray) -> Raw:
+        """The row at t = 0 of the state _state gives."""
+        n = self.system.n
+        return Raw(t=np.zeros(1), d=x[None, x_slice(n, 0)].copy(), v=np.zeros((1, n)),
+                   u=st[None, 0, :, kernels.U].copy(), f=st[None, 0, :, kernels.F].copy(),
+                   e=np.zeros((1, kernels.N_E)))
+
+    def chunks(self, x: np.ndarray, st: np.ndarray, fine: bool = False, extra: np.ndarray | None = None):
+        """Step the loop from the state (x, st) to the end, chunk by chunk: yields (first output
+        step, output steps, substeps each, the chunk's load at its compute nodes, its rows (every
+        compute step where ``fine``), kernel seconds). ``extra`` (compute nodes, n): a load added
+        to the scene's (rbhyst.solve.companion: only where no step is split)."""
+        system, s = self.system, self.settings
+        ne, n = self.bvec.shape
+        # a chunk of compute-step rows holds at least one output step's substeps (a pulse far
+        # shorter than dt splits one step into more rows than a chunk of a short run has)
+        buf = _Buffers(max(self.chunk, int(self.substeps.max())) if fine else self.chunk, ne, n)
+        for first, n_out, nsub in self.segments(fine):
+            t_c = s.dt * (first + np.arange(n_out * nsub + 1) / nsub)
+            load = np.ascontiguousarray(system.excitation.load_nodes(t_c, s.dt / nsub, system.mass))
+            if extra is not None:
+                load[:, :n] += extra[first:first + n_out + 1]
+            sub = nsub if fine else 1
+            tic = time.perf_counter()
+            written = self._call(load, s.dt * first, nsub, s.dt / nsub, nsub // sub, n_out * sub, x, st, buf)
+            wall = time.perf_counter() - tic
+            _raise_on_failure(system, s, self.info)
+            assert written == n_out * sub, "the loop wrote fewer rows than asked"
+            t = t_c[1:] if sub > 1 else s.dt * (first + 1 + np.arange(n_out))  # t_n = n dt, never accumulated
+            m = n_out * sub
+            yield first, n_out, nsub, load, Raw(t=t, d=buf.d[:m], v=buf.v[:m], u=buf.u[:m], f=buf.f[:m],
+                                                 e=buf.e[:m]), wall
+
+    def run(self, keep: bool = True, csv=None, compare_every: int | None = None, progress=None,
+            tap=None) -> Result:
+        """``tap(load, raw)``, if given, sees every chunk's load at its compute nodes and rows (the
+        error estimate's companion: rbhyst.solve.companion)."""
         system, s = self.system, self.settings
         ne, n = self.bvec.shape
         x, st = self._state()
         fine = s.spectra is not None
-        # a chunk of compute-step rows holds at least one output step's substeps (a pulse far
-        # shorter than dt splits one step into more rows than a chunk of a short run has)
-        buf = _Buffers(max(self.chunk, int(self.substeps.max())) if fine else self.chunk, ne, n)
         rows = Rows(self.layout, self.n_steps, s.every, keep, csv, spectra=s.spectra, dt=s.dt,
                     compare_every=compare_every)
-        start_row = Raw(t=np.zeros(1), d=x[None, x_slice(n, 0)].copy(), v=np.zeros((1, n)),
-                        u=st[None, 0, :, kernels.U].copy(), f=st[None, 0, :, kernels.F].copy(),
-                        e=np.zeros((1, kernels.N_E)))
         # the spectra see every compute step where the excitation is split (a short pulse's
         # response between the rows); nothing else does, and without spectra no row is made
         assert fine == (rows.spectra is not None)
         wall = 0.0
         try:
-            rows.add(start_row)
-            for first, n, nsub in self.segments(fine):
-                t_c = s.dt * (first + np.arange(n * nsub + 1) / nsub)
-                load = np.ascontiguousarray(system.excitation.load_nodes(t_c, s.dt / nsub, system.mass))
-                sub = nsub if fine else 1
-                tic = time.perf_counter()
-                written = self._call(load, s.dt * first, nsub, s.dt / nsub, nsub // sub, n * sub, x, st, buf)
-                wall += time.perf_counter() - tic
-                _raise_on_failure(system, s, self.info)
-                assert written == n * sub, "the loop wrote fewer rows than asked"
-                t = t_c[1:] if sub > 1 else s.dt * (first + 1 + np.arange(n))  # t_n = n dt, never accumulated
-                m = n * sub
-                rows.add(Raw(t=t, d=buf.d[:m], v=buf.v[:m], u=buf.u[:m], f=buf.f[:m], e=buf.e[:m]), sub=sub)
+            rows.add(self.start_row(x, st))
+            for first, n_out, nsub, load, raw, took in self.chunks(x, st, fine):
+                wall += took
+                if tap is not None:
+                    tap(load, raw)
+                rows.add(raw, sub=nsub if fine else 1)
                 if progress is not None:
-                    progress(first + n, self.n_steps, f"{s.integrator}: time stepping")
+                    progress(first + n_out, self.n_steps, f"{s.integrator}: time stepping")
         finally:
             table = rows.close()
         stats = RunStats(

@@ -1,0 +1,58 @@
+"""Element forces along a deformation history with every reversal located within its step.
+
+The time-stepping loop starts an element's new branch at the step where its deformation
+turned (seed eq. 14 with t_P at that node), not at the turn itself: the branch's origin is off
+by O(h^2) and so is every force along the branch until its memory fades. The error estimate
+(rbhyst.solve.companion) re-drives each element along its companion's deformation with the
+turn put where it is, the vertex of the parabola through the three samples around it, so that
+the companion's forces carry none of that error and the difference shows the run's.
+"""
+
+from numba import njit
+
+from rbhyst.model.vrm import vrm_update
+from rbhyst.solve.kernels.layout import A, F, G, K, S, U
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def redrive(params, st0, u, f_out):
+    """Drive element row e of ``params`` (ne, 2, 8) from its state st0[e] through the samples
+    u[:, e] (equally spaced in time), a reversal's vertex inserted between the samples it falls
+    between; f_out[i, e] the force at sample i (f_out[0] is st0's). Returns -1, or the sample at
+    which an element left its calibrated range."""
+    n = u.shape[0]
+    for e in range(u.shape[1]):
+        uu, f, s, g, k, a = st0[e, U], st0[e, F], st0[e, S], st0[e, G], st0[e, K], st0[e, A]
+        f_out[0, e] = f
+        for i in range(1, n):
+            # the vertex of sample i's parabola, if i turns and the vertex lies before it
+            if i < n - 1:
+                d0 = u[i, e] - u[i - 1, e]
+                d1 = u[i + 1, e] - u[i, e]
+                if d0 * d1 < 0.0:
+                    c = u[i - 1, e] - u[i + 1, e]
+                    x = 0.5 * c / (d1 - d0)  # its time after sample i, in steps (|x| <= 1/2)
+                    peak = u[i, e] - 0.25 * c * x
+                    if x < 0.0:
+                        f, s, g, k, a, _, _, ok = vrm_update(params, e, uu, f, s, g, k, a, peak)
+                        if not ok:
+                            return i
+                        uu = peak
+            f, s, g, k, a, _, _, ok = vrm_update(params, e, uu, f, s, g, k, a, u[i, e])
+            if not ok:
+                return i
+            uu = u[i, e]
+            f_out[i, e] = f
+            if i < n - 1:
+                d0 = u[i, e] - u[i - 1, e]
+                d1 = u[i + 1, e] - u[i, e]
+                if d0 * d1 < 0.0:
+                    c = u[i - 1, e] - u[i + 1, e]
+                    x = 0.5 * c / (d1 - d0)
+                    if x > 0.0:  # the vertex lies after sample i: drive to it now
+                        peak = u[i, e] - 0.25 * c * x
+                        f, s, g, k, a, _, _, ok = vrm_update(params, e, uu, f, s, g, k, a, peak)
+                        if not ok:
+                            return i
+                        uu = peak
+    return -1
