@@ -1,0 +1,110 @@
+"""The error estimate from a run's companion (rbhyst.solve.companion): each method's modified
+equation, the re-driven forces, and where the adaptive solutions take over."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import rbhyst
+from conftest import DECKS, seed_deck, square_linear_deck, write_deck
+from test_accuracy import true_errors
+
+METHODS = ["chang", "central-difference", "newmark"]
+
+
+def ratios(res) -> dict[str, float]:
+    """Every column's estimate over its true error (against the adaptive solution at rtol 1e-12)."""
+    est = res.accuracy["estimated_error"]
+    return {k: est[k] / t for k, t in true_errors(res).items() if t > 1e-9}
+
+
+def sine_on_square(damping: dict | None = None) -> dict:
+    """The square on four linear springs (2.0 Hz in translation) shaken at 1.3 Hz along x1 and
+    0.7 Hz along x2: nothing yields, so the run's error is the method's alone."""
+    data = square_linear_deck(k=4.0e4, mass=500.0)
+    data["excitation"] = {"support": {
+        "x1": {"type": "sine", "amplitude": 0.2, "frequency_hz": 1.3, "units": "g", "phase_deg": 90.0},
+        "x2": {"type": "sine", "amplitude": 0.1, "frequency_hz": 0.7, "units": "g"}}}
+    data["analysis"] = {"dt": 0.004, "duration": 4.0, "warn_error": 0.2}
+    if damping is not None:
+        data["damping"] = damping
+    return data
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_each_method_s_modified_equation_gives_its_error_on_a_linear_body(tmp_path, method):
+    """Where the response is smooth the companion is the exact solution to O(h^4): the estimate is
+    the true error within a few per cent (a wrong coefficient of S, such as Newmark's h^2/6 for
+    chang, is off by a factor of 5)."""
+    res = rbhyst.run(write_deck(tmp_path, sine_on_square()), integrator=method)
+    assert "companion" in res.accuracy and "reference" not in res.accuracy
+    for key in ("u1", "u2", "at1", "at2", "R1", "R2", "e1_f", "e3_f"):
+        assert 0.9 < ratios(res)[key] < 1.1, (key, ratios(res)[key])
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_viscous_damping_enters_the_modified_equation(tmp_path, method):
+    """With Rayleigh damping (10 % at both modes) the C terms of S: every column within 10 %."""
+    data = sine_on_square({"rayleigh": {"ratio": 0.1, "modes": [1, 3]}})
+    res = rbhyst.run(write_deck(tmp_path, data), integrator=method)
+    assert "companion" in res.accuracy
+    r = ratios(res)
+    assert all(0.9 < v < 1.1 for v in r.values()), r
+
+
+@pytest.mark.parametrize("method", METHODS)
+def test_the_seed_scene_s_estimate_is_honest_in_every_column(tmp_path, method):
+    """Yield and reversals: the companion's forces re-driven with each reversal located (without it
+    the forces read 0.16-0.6 of their error on a coarse random scene). The largest estimate within
+    20 % of the largest true error, every column within [0.5, 10] of its own: a column whose error
+    is far below the largest (u1 here, 5e-4 beside alphat3's 8e-2) mixes in what the run's and
+    the companion's reversals at the nodes make of the motion, and reads up to 3.5 times its error."""
+    data = seed_deck(duration=2.0, warn_error=0.9, dt=5e-4)
+    res = rbhyst.run(write_deck(tmp_path, data), integrator=method)
+    assert "companion" in res.accuracy
+    r = ratios(res)
+    assert all(0.5 <= v <= 10.0 for v in r.values()), r
+    worst = max(true_errors(res).values())
+    assert 0.8 <= max(res.accuracy["estimated_error"].values()) / worst <= 1.25
+
+
+def test_forces_re_driven_with_the_reversal_located(tmp_path):
+    """The redrive kernel: an element driven along samples of a smooth turn reaches the force of
+    the turn driven exactly (the vertex inserted), where the plain samples miss it by O(h^2)."""
+    from rbhyst.model.hysteresis import parameter_set
+    from rbhyst.model.vrm import drive
+    from rbhyst.solve.kernels.compiled import kernel
+    from conftest import TABLE3_SHEAR
+
+    p = np.ascontiguousarray(parameter_set(TABLE3_SHEAR["loading"], TABLE3_SHEAR["unloading"])[None])
+    t = np.linspace(0.0, 1.0, 41)
+    u = 0.02 * np.sin(2 * np.pi * 0.8 * t + 0.3)  # turns once, between samples
+    fine_t = np.linspace(0.0, 1.0, 40_001)
+    fine = np.empty(len(fine_t)), np.empty(len(fine_t)), np.empty(len(fine_t))
+    drive(p[0], 0.02 * np.sin(2 * np.pi * 0.8 * fine_t + 0.3), *fine)
+    exact = fine[0][::1000]
+    located = np.empty((len(t), 1))
+    assert kernel("redrive")(p, np.zeros((1, 6)), np.ascontiguousarray(u[:, None]), located) == -1
+    plain = np.empty(len(t)), np.empty(len(t)), np.empty(len(t))
+    drive(p[0], u, *plain)
+    after = t > 0.5
+    err_located = np.max(np.abs(located[after, 0] - exact[after]))
+    err_plain = np.max(np.abs(plain[0][after] - exact[after]))
+    assert err_located < 0.05 * err_plain, (err_located, err_plain)
+
+
+@pytest.mark.parametrize("why", ["kr-alpha", "exact", "spectra", "near the warning"])
+def test_the_adaptive_solutions_take_over_where_the_companion_does_not_apply(tmp_path, why):
+    data = seed_deck(duration=1.0, warn_error=0.5)
+    integrator = None
+    if why == "kr-alpha":
+        integrator = "kr-alpha"
+    elif why == "exact":
+        data["analysis"]["kinematics"] = "exact"
+    elif why == "spectra":
+        data["output"] = {"spectra": {"damping": [0.05], "periods_s": [0.1, 0.5]}}
+    else:
+        data["analysis"].update(dt=0.005, warn_error=0.001)
+    res = rbhyst.run(write_deck(tmp_path, data), integrator=integrator)
+    assert "companion" not in res.accuracy and res.accuracy["reference"]["rtol"] == pytest.approx(1e-9)
