@@ -46,9 +46,9 @@ class Raw:
     f: np.ndarray
     e: np.ndarray
 
-    def slice(self, start: int, stop: int) -> "Raw":
-        """Rows start..stop-1."""
-        return Raw(*(getattr(self, k)[start:stop] for k in ("t", "d", "v", "u", "f", "e")))
+    def slice(self, start: int, stop: int | None, step: int = 1) -> "Raw":
+        """Rows start..stop-1 (every step-th)."""
+        return Raw(*(getattr(self, k)[start:stop:step] for k in ("t", "d", "v", "u", "f", "e")))
 
 
 class Layout:

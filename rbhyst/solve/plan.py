@@ -309,6 +309,18 @@ class FixedStepPlan(Plan):
                                         np.zeros((ne, n_q)), np.zeros((N_W, n_q)), np.zeros((n_q, n_q)), buf.d, buf.v, buf.u, buf.f, buf.e,
                                         self.info)
 
+    def compute_nodes(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(t, h, out): every compute node's time from 0, the step the loop takes after it
+        (dt / substeps / 2^level0, the last node's the one before it), and the node of every
+        output step."""
+        s = self.settings
+        t = np.concatenate([[0.0], compute_times(self.bounds, self.substeps, s.dt)])
+        per = np.repeat(self.substeps, np.diff(self.bounds))
+        out = np.concatenate([[0], np.cumsum(per)])
+        step = s.dt / per / 2.0 ** np.array([self.level0[int(m)] for m in per])
+        h = np.repeat(step, per)
+        return t, np.append(h, h[-1:]), out
+
     def segments(self, fine: bool = False):
         """(first output step, steps, substeps each): runs of equal splitting, at most a chunk of
         rows long (of compute-step rows where ``fine``)."""
@@ -328,17 +340,19 @@ class FixedStepPlan(Plan):
         """Step the loop from the state (x, st) to the end, chunk by chunk: yields (first output
         step, output steps, substeps each, the chunk's load at its compute nodes, its rows (every
         compute step where ``fine``), kernel seconds). ``extra`` (compute nodes, n): a load added
-        to the scene's (rbhyst.solve.companion: only where no step is split)."""
+        to the scene's (rbhyst.solve.companion)."""
         system, s = self.system, self.settings
         ne, n = self.bvec.shape
         # a chunk of compute-step rows holds at least one output step's substeps (a pulse far
         # shorter than dt splits one step into more rows than a chunk of a short run has)
         buf = _Buffers(max(self.chunk, int(self.substeps.max())) if fine else self.chunk, ne, n)
+        node = 0  # the compute node the chunk starts at
         for first, n_out, nsub in self.segments(fine):
             t_c = s.dt * (first + np.arange(n_out * nsub + 1) / nsub)
             load = np.ascontiguousarray(system.excitation.load_nodes(t_c, s.dt / nsub, system.mass))
             if extra is not None:
-                load[:, :n] += extra[first:first + n_out + 1]
+                load[:, :n] += extra[node:node + n_out * nsub + 1]
+            node += n_out * nsub
             sub = nsub if fine else 1
             tic = time.perf_counter()
             written = self._call(load, s.dt * first, nsub, s.dt / nsub, nsub // sub, n_out * sub, x, st, buf)
@@ -357,12 +371,12 @@ class FixedStepPlan(Plan):
         system, s = self.system, self.settings
         ne, n = self.bvec.shape
         x, st = self._state()
-        fine = s.spectra is not None
+        spectra = s.spectra is not None
+        # the spectra see every compute step where the excitation is split (a short pulse's
+        # response between the rows), and so does a tap; without either no such row is made
+        fine = spectra or tap is not None
         rows = Rows(self.layout, self.n_steps, s.every, keep, csv, spectra=s.spectra, dt=s.dt,
                     compare_every=compare_every)
-        # the spectra see every compute step where the excitation is split (a short pulse's
-        # response between the rows); nothing else does, and without spectra no row is made
-        assert fine == (rows.spectra is not None)
         wall = 0.0
         try:
             rows.add(self.start_row(x, st))
@@ -370,7 +384,10 @@ class FixedStepPlan(Plan):
                 wall += took
                 if tap is not None:
                     tap(load, raw)
-                rows.add(raw, sub=nsub if fine else 1)
+                sub = nsub if fine else 1
+                if sub > 1 and not spectra:  # (for the tap only: the rows are the output steps')
+                    raw, sub = raw.slice(sub - 1, None, sub), 1
+                rows.add(raw, sub=sub)
                 if progress is not None:
                     progress(first + n_out, self.n_steps, f"{s.integrator}: time stepping")
         finally:
