@@ -194,7 +194,7 @@ def test_an_estimate_below_the_warning_is_honest_in_every_column(tmp_path, seed)
         assert 0.5 * true <= acc["estimated_error"][key] <= 2.0 * true, (key, acc["estimated_error"][key], true)
 
 
-SENSITIVE = ["silent-149.toml", "silent-31.toml", "silent-476.toml", "silent-70.toml", "silent-782.toml"]
+SENSITIVE = ["silent-149.toml", "silent-476.toml", "silent-70.toml", "silent-782.toml"]
 
 
 @pytest.mark.parametrize("case", SENSITIVE)
@@ -207,3 +207,21 @@ def test_the_sensitive_cases_are_said_to_be(case):
     assert res.accuracy["status"] == "sensitive"
     assert max(res.accuracy["reference_spread"].values()) > res.settings.warn_error
     assert any("the history is sensitive" in w for w in res.warnings)
+
+
+def test_a_history_whose_loose_solution_strays_is_not_called_sensitive():
+    """silent-31: elements that yield within a micrometre (alpha up to 1.7e6 /m). The adaptive
+    solutions at rtol 1e-7 and 1e-8 stray by 29 % and 10 % from the one at 1e-11, but 1e-9 and
+    1e-10 are within 0.6 % and 0.016 % of it: the history is determined, the loose solution is
+    merely inaccurate (it was called sensitive). The companion's check moves it by 7e-3 for a
+    perturbation of 1e-3 of its error (the sensitive cases: 9-95 %), below warn_error, and the
+    run's error, 8.7 % in the forces of the sharpest elements, is stated with the dt that would do."""
+    case = CASES / "silent-31.toml"
+    if not case.exists():
+        pytest.skip("the cases of silent wrong answers (../shared/cases) are not on this machine")
+    res = rbhyst.run(case)
+    acc = res.accuracy
+    assert acc["status"] == "estimated" and acc["companion"]["spread"] < res.settings.warn_error
+    true = true_errors(res)
+    assert 0.8 <= max(acc["estimated_error"].values()) / max(true.values()) <= 1.25
+    assert any("exceeds analysis.warn_error" in w for w in res.warnings)

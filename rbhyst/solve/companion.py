@@ -95,15 +95,19 @@ class Accelerations:
 
 
 class Deformations:
-    """The companion's tap: every compute step's coordinates, velocities and element deformations."""
+    """The companion's tap: every compute node's coordinates, velocities and element deformations,
+    into arrays of them all (the start row first)."""
 
-    def __init__(self, start):
-        self.d, self.v, self.u = [start.d], [start.v], [start.u]
+    def __init__(self, start, nodes: int):
+        self.d, self.v = np.empty((nodes, start.d.shape[1])), np.empty((nodes, start.v.shape[1]))
+        self.u = np.empty((nodes, start.u.shape[1]))
+        self.next = 0
+        self(None, start)
 
-    def __call__(self, load: np.ndarray, raw) -> None:
-        self.d.append(raw.d.copy())
-        self.v.append(raw.v.copy())
-        self.u.append(raw.u.copy())
+    def __call__(self, load, raw) -> None:
+        k, m = self.next, len(raw.t)
+        self.d[k:k + m], self.v[k:k + m], self.u[k:k + m] = raw.d, raw.v, raw.u
+        self.next = k + m
 
 
 def derivatives(a: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -124,10 +128,10 @@ def derivatives(a: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def source(method: str, a: np.ndarray, v: np.ndarray, t: np.ndarray, h: np.ndarray, mass: np.ndarray,
-           c: np.ndarray | None, k0: np.ndarray) -> np.ndarray:
+           c: np.ndarray | None, k0: np.ndarray, d=None) -> np.ndarray:
     """(nodes, n) -S at the nodes t, h the step the loop takes there: the load that takes the
-    method's leading error out (module docstring)."""
-    d1, d2 = derivatives(a, t)
+    method's leading error out (module docstring). d: derivatives(a, t), if at hand."""
+    d1, d2 = derivatives(a, t) if d is None else d
     hh = (h * h)[:, None]
     if method == "newmark":
         out = -hh * d2 * mass / 6.0
@@ -145,7 +149,7 @@ def source(method: str, a: np.ndarray, v: np.ndarray, t: np.ndarray, h: np.ndarr
 
 
 def velocity_offset(method: str, a: np.ndarray, v: np.ndarray, t: np.ndarray, h: np.ndarray,
-                    mass: np.ndarray, c: np.ndarray | None, k0: np.ndarray) -> np.ndarray:
+                    mass: np.ndarray, c: np.ndarray | None, k0: np.ndarray, d=None) -> np.ndarray:
     """(nodes, n) q' - V: how far the method's velocity is from the derivative of the smooth
     curve its nodes lie on (the same expansion as ``source``):
 
@@ -154,7 +158,7 @@ def velocity_offset(method: str, a: np.ndarray, v: np.ndarray, t: np.ndarray, h:
 
     The run starts at rest with V = 0, so its curve starts with q' = this: the companion starts
     with the opposite velocity, and its velocities are read as V + this."""
-    d1, _ = derivatives(a, t)
+    d1, _ = derivatives(a, t) if d is None else d
     hh = (h * h)[:, None]
     if method == "newmark":
         return hh * d1 / 12.0
@@ -166,36 +170,46 @@ def velocity_offset(method: str, a: np.ndarray, v: np.ndarray, t: np.ndarray, h:
     return out
 
 
-def companion_difference(plan, tap: Accelerations, compare_every: int):
-    """(rows, k): the run's estimate columns (history.estimate_columns) less its companion's, at
-    every compare_every-th step; and the companion's kernel seconds. None where an element's
-    re-driven force left its range."""
-    from rbhyst.solve.kernels.compiled import kernel
+class Companion:
+    """The run's companion, ready to step: its load (-S at every compute node, none within a step of
+    a signal's corner) and starting velocity worked out once from the run's tap."""
 
-    system, s = plan.system, plan.settings
-    a, v = np.concatenate(tap.a), np.concatenate(tap.v)
-    t, h, out_nodes = plan.compute_nodes()
-    args = (a, v, t, h, system.mass, tap.c, system.K0)
-    extra = source(s.integrator, *args)
-    extra[_near_breaks(system.excitation, t, h)] = 0.0
-    offset = velocity_offset(s.integrator, *args)
-    x, st = plan._state()
-    x[x_slice(system.n, 1)] = -offset[0]
-    st0 = st[0].copy()  # (the loop steps st in place)
-    keep = Deformations(plan.start_row(x, st))
-    wall = 0.0
-    for _, _, _, load, raw, took in plan.chunks(x, st, fine=True, extra=extra):
-        wall += took
-        keep(load, raw)
-    u = np.ascontiguousarray(np.concatenate(keep.u))
-    f = np.empty_like(u)
-    if kernel("redrive")(plan.params, st0, u, f) >= 0:
-        return None, wall
-    rows = out_nodes[::compare_every]
-    dd = np.concatenate(tap.d)[rows] - np.concatenate(keep.d)[rows]
-    dv = v[rows] - np.concatenate(keep.v)[rows] - offset[rows]
-    df = np.concatenate(tap.f)[rows] - f[rows]
-    return plan.layout.difference(dd, dv, df), wall
+    def __init__(self, plan, tap: Accelerations, compare_every: int):
+        system, s = plan.system, plan.settings
+        self.plan = plan
+        a, v = np.concatenate(tap.a), np.concatenate(tap.v)
+        t, h, out_nodes = plan.compute_nodes()
+        args = (a, v, t, h, system.mass, tap.c, system.K0, derivatives(a, t))
+        self.extra = source(s.integrator, *args)
+        self.extra[_near_breaks(system.excitation, t, h)] = 0.0
+        self.offset = velocity_offset(s.integrator, *args)
+        # the run at the compared steps
+        self.rows = out_nodes[::compare_every]
+        self.d, self.v = np.concatenate(tap.d)[self.rows], v[self.rows] - self.offset[self.rows]
+        self.f = np.concatenate(tap.f)[self.rows]
+
+    def run(self, scale: float = 1.0):
+        """(dd, dv, df): the run's coordinates, velocities and element forces less the companion's
+        at the compared steps (history.Layout.largest_change makes every column's of them), and
+        the companion's kernel seconds; None where an element's re-driven force left its range.
+        ``scale``: of the source (1: the companion; 1 + 1e-3: the check's, a perturbation a
+        thousand times smaller than the run's error)."""
+        from rbhyst.solve.kernels.compiled import kernel
+
+        plan = self.plan
+        x, st = plan._state()
+        x[x_slice(plan.system.n, 1)] = -self.offset[0]
+        st0 = st[0].copy()  # (the loop steps st in place)
+        keep = Deformations(plan.start_row(x, st), len(self.extra))
+        wall = 0.0
+        for _, _, _, load, raw, took in plan.chunks(x, st, fine=True, extra=scale * self.extra):
+            wall += took
+            keep(load, raw)
+        f = np.empty_like(keep.u)
+        if kernel("redrive")(plan.params, st0, keep.u, f) >= 0:
+            return None, wall
+        rows = self.rows
+        return (self.d - keep.d[rows], self.v - keep.v[rows], self.f - f[rows]), wall
 
 
 def _near_breaks(excitation, t: np.ndarray, h: np.ndarray) -> np.ndarray:

@@ -51,6 +51,15 @@ class Raw:
         return Raw(*(getattr(self, k)[start:stop:step] for k in ("t", "d", "v", "u", "f", "e")))
 
 
+def largest_abs(x: np.ndarray) -> np.ndarray:
+    """max_t |x| of every column of (rows, k): column by column in memory (numpy reduces a
+    C-ordered array of a few columns down its rows some thirty times slower), no |x| array."""
+    if len(x) == 0:
+        return np.zeros(x.shape[1])
+    x = np.asfortranarray(x)
+    return np.maximum(x.max(axis=0), -x.min(axis=0))
+
+
 class Layout:
     """Which columns a scene's table has and how a Raw chunk becomes rows of them."""
 
@@ -165,12 +174,12 @@ class Layout:
         self._rest(raw, out, at)
         return out
 
-    def difference(self, dd: np.ndarray, dv: np.ndarray, df: np.ndarray) -> np.ndarray:
-        """(rows, k) the change of every estimate column (estimate_columns) that changes of the
-        coordinates, velocities and element forces (dd, dv, df; the kernels' rows) make at the
-        same times: the table is linear in them with the seed's small rotations (the load, the
-        support and the origin cancel). What the error estimate's companion compares
-        (rbhyst.solve.companion)."""
+    def largest_change(self, dd: np.ndarray, dv: np.ndarray, df: np.ndarray) -> np.ndarray:
+        """(k,) the largest change over the rows of every estimate column (estimate_columns) that
+        changes of the coordinates, velocities and element forces (dd, dv, df: the kernels'
+        rows) make at the same times: the table is linear in them with the seed's small
+        rotations (the load, the support and the origin cancel). What the error estimate's
+        companion compares (rbhyst.solve.companion)."""
         assert self._rot == SMALL, "the table is linear in the state only with small rotations"
         dr = df @ self._rb
         dat = -dr
@@ -179,15 +188,11 @@ class Layout:
         dat *= self._minv
         if self._back is not None:
             dd, dr, dat = dd @ self._back, dr @ self._back, dat @ self._back
-        blocks = {"d": dd, "at": dat, "R": dr}
-        cols = [blocks[fam][:, j] for fam in ("d", "at", "R") for j in range(len(self.coordinates))]
-        moving = translations(self.coordinates)
+        out = [largest_abs(dd), largest_abs(dat), largest_abs(dr)]
         for _, x in self.points:
-            motion = point_motion(dd, dat, x, coordinates=self.coordinates)
-            cols += [motion[:, r] for r in range(len(moving))]
-            cols += [motion[:, len(moving) + r] for r in range(len(moving))]
-        cols += [df[:, row] for row in self._expand]
-        return np.column_stack(cols)
+            out.append(largest_abs(point_motion(dd, dat, x, coordinates=self.coordinates)))
+        out.append(largest_abs(df)[self._expand])
+        return np.concatenate(out)
 
     def _rest(self, raw: Raw, out: np.ndarray, at: np.ndarray, omega=None) -> None:
         """The columns after G's motion, resultant and total acceleration (in the deck's axes in

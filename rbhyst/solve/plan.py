@@ -315,10 +315,10 @@ class FixedStepPlan(Plan):
         output step."""
         s = self.settings
         t = np.concatenate([[0.0], compute_times(self.bounds, self.substeps, s.dt)])
-        per = np.repeat(self.substeps, np.diff(self.bounds))
-        out = np.concatenate([[0], np.cumsum(per)])
-        step = s.dt / per / 2.0 ** np.array([self.level0[int(m)] for m in per])
-        h = np.repeat(step, per)
+        lengths = np.diff(self.bounds)
+        out = np.concatenate([[0], np.cumsum(np.repeat(self.substeps, lengths))])
+        step = np.array([s.dt / m / 2.0 ** self.level0[int(m)] for m in self.substeps])
+        h = np.repeat(step, lengths * self.substeps)
         return t, np.append(h, h[-1:]), out
 
     def segments(self, fine: bool = False):
