@@ -94,11 +94,12 @@ def test_load_deck_errors_are_input_errors(tmp_path):
         rbhyst.load_deck(bad)
 
 
-def test_pandas_and_matplotlib_are_imported_only_when_used():
+def test_pandas_and_matplotlib_are_imported_only_when_used(tmp_path):
     code = ("import sys, rbhyst; r = rbhyst.run(sys.argv[1]); "
             "assert 'pandas' not in sys.modules and 'matplotlib' not in sys.modules; "
             "r.to_pandas(); assert 'pandas' in sys.modules")
-    subprocess.run([sys.executable, "-c", code, str(DECKS / "machine_on_mounts.toml")], check=True)
+    # (from a folder outside the source tree, as every subprocess here: the installed package)
+    subprocess.run([sys.executable, "-c", code, str(DECKS / "machine_on_mounts.toml")], check=True, cwd=tmp_path)
 
 
 def test_writing_plots_leaves_the_callers_matplotlib_as_it_was(tmp_path):
@@ -108,7 +109,7 @@ def test_writing_plots_leaves_the_callers_matplotlib_as_it_was(tmp_path):
             "rbhyst.run(sys.argv[1]).write(sys.argv[2], plots=True); "
             "assert dict(matplotlib.rcParams) == before; assert plt.get_fignums() == [fig.number]")
     subprocess.run([sys.executable, "-c", code, str(DECKS / "machine_on_mounts.toml"), str(tmp_path / "out")],
-                   check=True)
+                   check=True, cwd=tmp_path)
     assert (tmp_path / "out" / "model.png").exists()
 
 
@@ -124,5 +125,5 @@ def test_a_run_into_a_folder_loads_only_what_its_scene_needs(tmp_path):
             "print(sorted(m for m in ('rbhyst.solve.spectra', 'scipy', 'matplotlib', 'pandas') "
             "if m in sys.modules and not (jit and m == 'scipy')))")
     done = subprocess.run([sys.executable, "-c", code, str(DECKS / "machine_on_mounts.toml"), str(tmp_path / "o")],
-                          capture_output=True, text=True, check=True)
+                          capture_output=True, text=True, check=True, cwd=tmp_path)
     assert done.stdout.split("\n")[-2] == "[]", done.stdout + done.stderr

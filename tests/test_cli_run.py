@@ -121,16 +121,16 @@ def test_no_plots_never_imports_matplotlib(tmp_path):
         "except SystemExit as e:\n    assert e.code in (0, None), e.code\n"
         "assert 'matplotlib' not in sys.modules, 'matplotlib was imported'\n"
     )
-    subprocess.run([sys.executable, "-c", code], check=True, capture_output=True)
+    subprocess.run([sys.executable, "-c", code], check=True, capture_output=True, cwd=tmp_path)
 
 
-def test_importing_the_command_line_loads_no_heavy_library():
+def test_importing_the_command_line_loads_no_heavy_library(tmp_path):
     """`rbhyst --help` and every command start from `import rbhyst.cli`: the libraries of the
     analysis, the plots, the sweeps and the deck's YAML come with the command that needs them."""
     heavy = ("numpy", "pydantic", "matplotlib", "scipy", "numba", "dask", "distributed", "pandas", "pyarrow",
              "rich", "yaml")
     code = f"import sys, rbhyst.cli; print([m for m in {heavy!r} if m in sys.modules])"
-    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=tmp_path)
     assert done.stdout.strip() == "[]", done.stdout + done.stderr
 
 
@@ -144,7 +144,7 @@ def test_a_toml_run_with_plots_loads_no_yaml_and_no_spectra_kernels(tmp_path):
         "except SystemExit as e:\n    assert e.code in (0, None), e.code\n"
         "print(sorted(m for m in ('yaml', 'rbhyst.solve.spectra', 'numba') if m in sys.modules))\n"
     )
-    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=tmp_path)
     loaded = done.stdout.split("\n")[-2]
     # numba's own configuration imports yaml: where the kernels come from numba's JIT (a working
     # copy whose kernels changed since they were built), yaml comes with it, not with the deck
