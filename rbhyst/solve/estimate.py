@@ -28,11 +28,13 @@ that perturbations of that size leave determined to better than the warning need
 solution to say so. An adaptive run is its own check (the solution 100 times looser than the
 reference at the same times), so it costs one solution too.
 
-A fixed-step run of chang, central difference or Newmark whose estimate stays below half of
-the warning is measured against its companion instead (rbhyst.solve.companion: the same method
-with its leading local error taken out of the load, one more time stepping): no adaptive
-solution at all. Above it, or where the companion does not apply, the adaptive solutions as
-above.
+A fixed-step run of chang, central difference or Newmark is measured against its companion
+instead (rbhyst.solve.companion: the same method with its leading local error taken out of the
+load, one more time stepping), no adaptive solution at all. Near the warning its check is a
+second companion whose source is larger by COMPANION_PROBE: a determined history moves by that
+fraction of its error, a sensitive one as much as the run; where it moves by more than the
+warning, and where the companion does not apply or its estimate exceeds COMPANION_LARGEST, the
+adaptive solutions as above.
 
 Fixed-step methods win on cost where reversals are many (each is an adaptive step); past a
 budget of adaptive steps the estimate falls back to halving the run's step (status
