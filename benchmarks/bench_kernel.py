@@ -51,7 +51,7 @@ def main() -> None:
     buf = _Buffers(n, ne, system.n)
     times = []
     for _ in range(args.repeat):
-        x, st = plan._state()
+        x, st = plan.initial_state()
         t0 = time.perf_counter()
         plan._call(load, 0.0, 1, settings.dt, 1, n, x, st, buf)
         times.append(time.perf_counter() - t0)

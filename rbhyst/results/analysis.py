@@ -87,4 +87,4 @@ def _companion(planned):
 
     if not isinstance(planned, FixedStepPlan) or companion.unfit(planned) is not None:
         return None
-    return planned, companion.Accelerations(planned)
+    return planned, companion.RunTap(planned)

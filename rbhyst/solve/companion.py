@@ -66,7 +66,7 @@ def unfit(plan) -> str | None:
     return None
 
 
-class Accelerations:
+class RunTap:
     """A run's tap (plan.run): at every compute step its coordinates, velocities and element
     forces, and the method's own acceleration A = M^-1 (p - R - C V) at the nodes, the load as
     the loop took it."""
@@ -75,7 +75,7 @@ class Accelerations:
         self.minv = plan.minv
         self.rb = np.ascontiguousarray(plan.system.bvec * plan.system.mult[:, None])
         self.c = plan.cm[:plan.system.n] if plan.damped else None
-        x, st = plan._state()
+        x, st = plan.initial_state()
         start = plan.start_row(x, st)
         self.a = [x[None, x_slice(plan.system.n, 2)].copy()]
         self.d, self.v, self.f = [start.d], [start.v], [start.f]
@@ -94,7 +94,7 @@ class Accelerations:
         self.wall_s += time.perf_counter() - tic
 
 
-class Deformations:
+class CompanionRows:
     """The companion's tap: every compute node's coordinates, velocities and element deformations,
     into arrays of them all (the start row first)."""
 
@@ -174,7 +174,7 @@ class Companion:
     """The run's companion, ready to step: its load (-S at every compute node, none within a step of
     a signal's corner) and starting velocity worked out once from the run's tap."""
 
-    def __init__(self, plan, tap: Accelerations, compare_every: int):
+    def __init__(self, plan, tap: RunTap, compare_every: int):
         system, s = plan.system, plan.settings
         self.plan = plan
         a, v = np.concatenate(tap.a), np.concatenate(tap.v)
@@ -197,10 +197,10 @@ class Companion:
         from rbhyst.solve.kernels.compiled import kernel
 
         plan = self.plan
-        x, st = plan._state()
+        x, st = plan.initial_state()
         x[x_slice(plan.system.n, 1)] = -self.offset[0]
         st0 = st[0].copy()  # (the loop steps st in place)
-        keep = Deformations(plan.start_row(x, st), len(self.extra))
+        keep = CompanionRows(plan.start_row(x, st), len(self.extra))
         wall = 0.0
         for _, _, _, load, raw, took in plan.chunks(x, st, fine=True, extra=scale * self.extra):
             wall += took

@@ -223,7 +223,7 @@ class Estimator:
 
 def estimate(result, settings, companion=None) -> dict:
     """summary.json's ``accuracy`` for a finished run (see the module docstring). ``companion``:
-    (the run's plan, the Accelerations it tapped), where rbhyst.solve.companion applies."""
+    (the run's plan, the RunTap that saw its chunks), where rbhyst.solve.companion applies."""
     system = result.system
     t, values = result.compared[:, 0], result.compared[:, 1:]
     tic = time.perf_counter()

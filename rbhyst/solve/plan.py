@@ -262,9 +262,9 @@ class FixedStepPlan(Plan):
         self.chunk = min(_chunk_rows(ne, system.n, len(self.layout.names), self.nsub), self.n_steps)
         # load (or compile) the kernel
         nsub = next(iter(self.coef))
-        self._call(np.zeros((1, system.n)), 0.0, nsub, s.dt / nsub, nsub, 0, *self._state(), _Buffers(1, ne, system.n))
+        self._call(np.zeros((1, system.n)), 0.0, nsub, s.dt / nsub, nsub, 0, *self.initial_state(), _Buffers(1, ne, system.n))
 
-    def _state(self):
+    def initial_state(self):
         """The loop's state at t = 0: at rest, elements virgin, and the initial acceleration."""
         from rbhyst.model.hysteresis import virgin_tangent
 
@@ -370,7 +370,7 @@ class FixedStepPlan(Plan):
         error estimate's companion: rbhyst.solve.companion)."""
         system, s = self.system, self.settings
         ne, n = self.bvec.shape
-        x, st = self._state()
+        x, st = self.initial_state()
         spectra = s.spectra is not None
         # the spectra see every compute step where the excitation is split (a short pulse's
         # response between the rows), and so does a tap; without either no such row is made
