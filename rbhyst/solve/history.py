@@ -150,10 +150,7 @@ class Layout:
         out[:, self.slices["d"]] = raw.d - self.origin
         out[:, self.slices["v"]] = raw.v
         r = out[:, self.slices["R"]]
-        r[:] = raw.f @ self._rb
-        if self._rot >= 0:
-            th = raw.d[:, self._rot]
-            r[:, self._rot] = np.cos(th) * r[:, self._rot] - np.sin(th) * (raw.f @ self._rc)
+        r[:] = self.restoring(raw.f, raw.d)
         # the total acceleration from the equation of motion at the row's own state and time:
         # M at = p(t) - R - C v (the elements and dampers see only the relative motion, so it is
         # continuous where the support acceleration jumps; a jump of an external force: the row
@@ -173,6 +170,15 @@ class Layout:
                 block[:] = block @ self._back
         self._rest(raw, out, at)
         return out
+
+    def restoring(self, f: np.ndarray, d: np.ndarray) -> np.ndarray:
+        """(rows, n) the mounts' resultant R = sum mult b_e(q) f_e from the kernel rows' forces f at
+        the coordinates d (the plane: small or exact rotations)."""
+        r = f @ self._rb
+        if self._rot >= 0:
+            th = d[:, self._rot]
+            r[:, self._rot] = np.cos(th) * r[:, self._rot] - np.sin(th) * (f @ self._rc)
+        return r
 
     def largest_change(self, dd: np.ndarray, dv: np.ndarray, df: np.ndarray) -> np.ndarray:
         """(k,) the largest change over the rows of every estimate column (estimate_columns) that

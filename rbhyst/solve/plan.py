@@ -282,15 +282,17 @@ class FixedStepPlan(Plan):
                       self.system.rotation_index, self.axial)[0]
         if static is not None:  # at rest at the static equilibrium under gravity, its branches as the path left them
             st[0] = static.st
+            st[0, :, kernels.UP] = st[0, :, kernels.U]  # (no step before the first)
             x[x_slice(n, 0)] = static.q
             p0 = p0 - static.r
         x[x_slice(n, 2)] = self.minv * p0  # equilibrium at t = 0: records rarely start at zero
         x[X_CUR] = 0
         return x, st
 
-    def _call(self, load, t0, nsub, h_c, rows_every, n, x, st, buf):
+    def _call(self, load, t0, nsub, h_c, rows_every, n, x, st, buf, rot=None):
         """n rows of the loop: compute steps of h_c with the coefficients of ``nsub`` substeps a
-        step of dt, a row after every ``rows_every``-th of them."""
+        step of dt, a row after every ``rows_every``-th of them (``rot``: the kinematics' code,
+        if not the system's: kernels.layout.LOCATED)."""
         from rbhyst.solve.kernels.compiled import kernel
 
         s = self.settings
@@ -302,7 +304,8 @@ class FixedStepPlan(Plan):
         # compilation per n), which unrolls every loop over the coordinates
         return kernel("run_chunk", n_q)(self.method.kernel_id, self.coef[nsub], tuple(self.system.mass), tuple(self.minv),
                                         self.cm, self.damped,
-                                        self.bvec, self.axial, self.system.rotation_index, self.system.mult,
+                                        self.bvec, self.axial, self.system.rotation_index if rot is None else rot,
+                                        self.system.mult,
                                         self.params, self.wgt, load,
                                         t0, h_c, rows_every, n, s.max_omega_dt, self.level0[nsub], s.max_substep_level,
                                         s.newton_tol, s.newton_max_iter, x, st, np.zeros((ne, N_STATE)), np.zeros((ne, 2)),
@@ -336,11 +339,12 @@ class FixedStepPlan(Plan):
                    u=st[None, 0, :, kernels.U].copy(), f=st[None, 0, :, kernels.F].copy(),
                    e=np.zeros((1, kernels.N_E)))
 
-    def chunks(self, x: np.ndarray, st: np.ndarray, fine: bool = False, extra: np.ndarray | None = None):
+    def chunks(self, x: np.ndarray, st: np.ndarray, fine: bool = False, extra: np.ndarray | None = None,
+               rot: int | None = None):
         """Step the loop from the state (x, st) to the end, chunk by chunk: yields (first output
         step, output steps, substeps each, the chunk's load at its compute nodes, its rows (every
         compute step where ``fine``), kernel seconds). ``extra`` (compute nodes, n): a load added
-        to the scene's (rbhyst.solve.companion)."""
+        to the scene's, ``rot`` a kinematics' code other than the system's (rbhyst.solve.companion)."""
         system, s = self.system, self.settings
         ne, n = self.bvec.shape
         # a chunk of compute-step rows holds at least one output step's substeps (a pulse far
@@ -355,7 +359,7 @@ class FixedStepPlan(Plan):
             node += n_out * nsub
             sub = nsub if fine else 1
             tic = time.perf_counter()
-            written = self._call(load, s.dt * first, nsub, s.dt / nsub, nsub // sub, n_out * sub, x, st, buf)
+            written = self._call(load, s.dt * first, nsub, s.dt / nsub, nsub // sub, n_out * sub, x, st, buf, rot)
             wall = time.perf_counter() - tic
             _raise_on_failure(system, s, self.info)
             assert written == n_out * sub, "the loop wrote fewer rows than asked"

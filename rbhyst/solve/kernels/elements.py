@@ -10,7 +10,7 @@ import math
 from numba import njit
 
 from rbhyst.model.vrm import vrm_update
-from rbhyst.solve.kernels.layout import A, F, G, K, S, SPATIAL, U
+from rbhyst.solve.kernels.layout import A, F, G, K, LOCATED, S, SPATIAL, U, UP
 from rbhyst.solve.kernels.rotations import element_row, rotation, turned
 
 
@@ -175,11 +175,15 @@ def update_elements(bvec, axial, rot, mult, params, q0, q, st, cur, kpeak, r, bq
             u = bvec[e, 0] * q[0]
             for i in range(1, n):
                 u += bvec[e, i] * q[i]
-        f, s, g, k, a, kstart, w, ok = vrm_update(params, e, st[cur, e, U], st[cur, e, F], st[cur, e, S],
-                                                  st[cur, e, G], st[cur, e, K], st[cur, e, A], u)
+        if rot == LOCATED:
+            f, s, g, k, a, kstart, w, ok = located_update(params, e, st, cur, u)
+        else:
+            f, s, g, k, a, kstart, w, ok = vrm_update(params, e, st[cur, e, U], st[cur, e, F], st[cur, e, S],
+                                                      st[cur, e, G], st[cur, e, K], st[cur, e, A], u)
         if not ok:
             return False, e, work, kgeo
         nxt = 1 - cur
+        st[nxt, e, UP] = st[cur, e, U]
         st[nxt, e, U] = u
         st[nxt, e, F] = f
         st[nxt, e, S] = s
@@ -199,6 +203,30 @@ def update_elements(bvec, axial, rot, mult, params, q0, q, st, cur, kpeak, r, bq
             for i in range(n):
                 r[i] += mf * bvec[e, i]
     return True, -1, work, kgeo
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def located_update(params, e, st, cur, u):
+    """vrm_update of element e from st[cur, e] to u where its last step moved along its branch and
+    this one turns: to the turn first, the vertex of the parabola through the deformations a
+    step before, now and at u (O(h^3) from the true turn where the node is O(h^2)), then on the
+    new branch to u. Returns as vrm_update (the work of both parts; the tangent at the start of
+    the new branch)."""
+    u0 = st[cur, e, U]
+    s0 = st[cur, e, S]
+    d0 = u0 - st[cur, e, UP]
+    d1 = u - u0
+    if s0 != 0.0 and d0 * s0 > 0.0 and d1 * s0 < 0.0:
+        c = st[cur, e, UP] - u
+        x = 0.5 * c / (d1 - d0)
+        peak = u0 - 0.25 * c * x
+        f, s, g, k, a, _, w, ok = vrm_update(params, e, u0, st[cur, e, F], s0, st[cur, e, G], st[cur, e, K],
+                                             st[cur, e, A], peak)
+        if not ok:
+            return f, s, g, k, a, k, w, ok
+        f, s, g, k, a, kstart, w2, ok = vrm_update(params, e, peak, f, s, g, k, a, u)
+        return f, s, g, k, a, kstart, w + w2, ok
+    return vrm_update(params, e, u0, st[cur, e, F], s0, st[cur, e, G], st[cur, e, K], st[cur, e, A], u)
 
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)

@@ -17,10 +17,14 @@ NEWTON_FAILED = -2
 # body's rotation with exact kinematics (rbhyst.model.kinematics)
 SMALL = -1  # the seed's rows, u_e = b_e . q
 SPATIAL = -2  # a body in space with exact kinematics: q[3:6] its rotation vector (rbhyst.model.rotations)
+#: the seed's rows, each element's turn put within the step where it falls (the vertex of the
+#: parabola through its last three deformations) rather than at the node: the error estimate's
+#: companion (rbhyst.solve.companion), whose motion must not carry the run's O(h^2) branch origins
+LOCATED = -3
 
 # element state columns: displacement, force, branch sign, gap, tangent, antiderivative
-U, F, S, G, K, A = range(6)
-N_STATE = 6
+U, F, S, G, K, A, UP = range(7)  # UP: the deformation a step before (LOCATED)
+N_STATE = 7
 
 # info: how a chunk ended
 I_STATUS, I_ELEMENT, I_TIME, I_STIFFNESS, I_OMEGA, I_DISP, I_BRANCH = range(7)

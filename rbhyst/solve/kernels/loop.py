@@ -19,7 +19,7 @@ import math
 from numba import njit
 
 from rbhyst.solve.integrators.steps import take_step
-from rbhyst.solve.kernels.layout import (E_HYST, E_IN, E_KIN, E_VISC, F, I_BRANCH, I_DISP, I_ELEMENT, I_OMEGA, I_STATUS, I_STIFFNESS, I_TIME, NEWTON_FAILED, NONFINITE, NOT_CONVERGED, OK, OVERFLOW, S, SMALL, SPATIAL, U, UNRESOLVED, W_A, W_AN, W_D, W_DN, W_PA, W_PB, W_Q, W_SA, W_SD, W_SV, W_V, W_VN, W_X, W_Z, X_CUR, X_E_HYST, X_E_IN, X_E_VISC, X_ITER, X_LEVEL, X_LEVEL_USED, X_OMEGA_DT2, X_Q, X_STEPS, X_SUBSTEPS)
+from rbhyst.solve.kernels.layout import (E_HYST, E_IN, E_KIN, E_VISC, F, I_BRANCH, I_DISP, I_ELEMENT, I_OMEGA, I_STATUS, I_STIFFNESS, I_TIME, NEWTON_FAILED, NONFINITE, NOT_CONVERGED, OK, OVERFLOW, S, SPATIAL, U, UNRESOLVED, W_A, W_AN, W_D, W_DN, W_PA, W_PB, W_Q, W_SA, W_SD, W_SV, W_V, W_VN, W_X, W_Z, X_CUR, X_E_HYST, X_E_IN, X_E_VISC, X_ITER, X_LEVEL, X_LEVEL_USED, X_OMEGA_DT2, X_Q, X_STEPS, X_SUBSTEPS)
 from rbhyst.solve.kernels.elements import (copy_rows, copy_vector, omega_squared, omega_squared_exact, row_dot,
                                            turned_dampers)
 from rbhyst.solve.kernels.rotations import compose
@@ -123,7 +123,7 @@ def run_chunk(method, coef, mass, minv, cm, damped, bvec, axial, rot, mult, para
                         wgt[e] = acc
                 lam, worst = omega_squared(mult, kpeak, wgt)
                 if lam * h * h > limit2:
-                    lam = omega_squared_exact(bq if rot != SMALL else bvec, mult, minv, kpeak, wm, w[W_Q])
+                    lam = omega_squared_exact(bq if rot >= 0 or rot == SPATIAL else bvec, mult, minv, kpeak, wm, w[W_Q])
                     if lam * h * h > limit2:
                         if level >= max_level:
                             _fail(info, UNRESOLVED, worst, t_now)
