@@ -18,17 +18,21 @@ to O(h^4) plus the same O(h^2) error of its own, which cancels. The difference o
 run's error, through every yield and reversal, as the nonlinear run sees them.
 
 One part of the error is not in S: the loop starts an element's new branch at the node where
-its deformation turned, not at the turn (seed eq. 14), O(h^2) off, and every force along the
-branch carries that until its memory fades. The companion's forces are therefore re-driven
-along its deformation with each turn located within its step (rbhyst.solve.kernels.redrive);
-its resultant, accelerations and points follow from them by the equation of motion, as every
-row's do (history.Layout).
+its deformation turned, not at the turn (seed eq. 14), O(h^2) off; the force carries that along
+the branch, and the motion the drift it leaves (a body that creeps under cyclic load). The
+companion therefore steps with every turn put within its step (kernels.layout.LOCATED: the
+vertex of the parabola through the element's last three deformations), and its forces at the
+rows are re-driven by the same rule (rbhyst.solve.kernels.redrive); its resultant,
+accelerations and points follow from them by the equation of motion, as every row's do
+(history.Layout).
 
-Measured against the event-located adaptive solution at rtol 1e-12 (tests/test_accuracy.py):
-every column of the seed deck within 0.66-1.05 of its true error, of random scenes 0.5-1.6. The
-companion costs one more time stepping and one pass of the elements. Where it does not apply (steps
-the stiffness monitor split, exact kinematics, KR-alpha, spectra) or where its estimate comes near the warning,
-the estimate is the adaptive solutions' (rbhyst.solve.estimate).
+Measured against the event-located adaptive solution at rtol 1e-12 (tests/test_accuracy.py,
+tests/test_companion.py): every column of the seed deck within 0.93-1.12 of its true error; of 24
+random scenes with the three methods 98.8 % of 729 columns within [0.5, 2] (0.54-4.2, the widest
+on short pulses). The companion costs one more time stepping and one pass of the elements.
+Where it does not apply (exact kinematics, KR-alpha, spectra, steps the stiffness monitor split)
+or where its estimate exceeds 20 %, the estimate is the adaptive solutions'
+(rbhyst.solve.estimate).
 """
 
 from __future__ import annotations
