@@ -42,8 +42,7 @@ import time
 import numpy as np
 
 from rbhyst.model.kinematics import loads_at
-from rbhyst.solve.history import Raw, estimate_columns, largest_abs
-from rbhyst.solve.kernels.layout import LOCATED, N_E, SMALL, SPATIAL, x_slice
+from rbhyst.solve.kernels.layout import LOCATED, SMALL, x_slice
 
 #: the methods whose modified equation is written out here
 METHODS = ("chang", "central-difference", "newmark")
@@ -179,8 +178,7 @@ class Companion:
     """The run's companion, ready to step: its load (-S at every compute node, none within a step of
     a signal's corner) and starting velocity worked out once from the run's tap."""
 
-    def __init__(self, plan, tap: RunTap, compare_every: int, values: np.ndarray):
-        """values: the run's estimate columns at every compare_every-th step (Result.compared)."""
+    def __init__(self, plan, tap: RunTap, compare_every: int):
         system, s = plan.system, plan.settings
         self.plan = plan
         a, v = np.concatenate(tap.a), np.concatenate(tap.v)
@@ -189,10 +187,8 @@ class Companion:
         self.extra = source(s.integrator, *args)
         self.extra[_near_breaks(system.excitation, t, h)] = 0.0
         self.offset = velocity_offset(s.integrator, *args)
-        # the run at the compared steps
-        self.t, self.rows = t, out_nodes[::compare_every]
-        self.columns = [c for _, c, _ in estimate_columns(plan.layout)]
-        self.values = values
+        # the run at the compared steps, its velocities read on its curve
+        self.rows = out_nodes[::compare_every]
         self.d, self.v = np.concatenate(tap.d)[self.rows], v[self.rows] - self.offset[self.rows]
         self.f = np.concatenate(tap.f)[self.rows]
 
@@ -210,36 +206,17 @@ class Companion:
         st0 = st[0].copy()  # (the loop steps st in place)
         keep = CompanionRows(plan.start_row(x, st), len(self.extra))
         wall = 0.0
-        # with the seed's rows, every turn is put where it falls within its step (LOCATED): the
-        # companion's motion then carries none of the run's O(h^2) branch origins, whose drift
-        # (a body that creeps under cyclic load) it would otherwise share and cancel
-        located = LOCATED if plan.system.rotation_index == SMALL else None
-        for _, _, _, load, raw, took in plan.chunks(x, st, fine=True, extra=scale * self.extra, rot=located):
+        # every turn put where it falls within its step (LOCATED): the companion's motion then
+        # carries none of the run's O(h^2) branch origins, whose drift (a body that creeps under
+        # cyclic load) it would otherwise share and cancel
+        for _, _, _, load, raw, took in plan.chunks(x, st, fine=True, extra=scale * self.extra, rot=LOCATED):
             wall += took
             keep(load, raw)
         f = np.empty_like(keep.u)
         if kernel("redrive")(plan.params, st0, keep.u, f) >= 0:
             return None, wall
         rows = self.rows
-        if plan.system.rotation_index == SMALL:
-            return (self.d - keep.d[rows], self.v - keep.v[rows], self.f - f[rows]), wall
-        # exact rotations: the table is not linear in the state; the companion's own rows, its
-        # velocities read on its curve
-        raw = Raw(t=self.t[rows], d=keep.d[rows], v=keep.v[rows] + self.offset[rows], u=keep.u[rows], f=f[rows],
-                  e=np.zeros((len(rows), N_E)))
-        return plan.layout.table(raw)[:, self.columns], wall
-
-    def largest(self, diff) -> np.ndarray:
-        """(k,) max_t |run - companion| of every estimate column, from what ``run`` gave."""
-        if isinstance(diff, tuple):
-            return self.plan.layout.largest_change(*diff)
-        return largest_abs(self.values - diff)
-
-    def moved(self, one, other) -> np.ndarray:
-        """(k,) max_t |companion - probe| of every estimate column, from what ``run`` gave each."""
-        if isinstance(one, tuple):
-            return self.plan.layout.largest_change(*(a - b for a, b in zip(one, other)))
-        return largest_abs(one - other)
+        return (self.d - keep.d[rows], self.v - keep.v[rows], self.f - f[rows]), wall
 
 
 def _near_breaks(excitation, t: np.ndarray, h: np.ndarray) -> np.ndarray:

@@ -297,15 +297,15 @@ def _from_companion(result, settings, plan, tap) -> dict | None:
         return None
     cols = estimate_columns(result.layout)
     keys, families = [k for k, _, _ in cols], [f for _, _, f in cols]
-    values = result.compared[:, 1:]
-    companion = Companion(plan, tap, result.compare_every, values)
+    companion = Companion(plan, tap, result.compare_every)
     diff, wall = companion.run()
     if diff is None:
         return None
     # every column against the run's peaks (the companion's are the same to within the error: a
     # second-order change of a relative error)
-    peaks = largest_abs(values)
-    err = relative_to_peaks(companion.largest(diff), peaks, keys, families, result.system)
+    peaks = largest_abs(result.compared[:, 1:])
+    change = result.layout.largest_change
+    err = relative_to_peaks(change(*diff), peaks, keys, families, result.system)
     info = {"steps": int(stats.steps_taken), "wall_s": wall}
     if max(err, default=0.0) > COMPANION_LARGEST:
         return None
@@ -316,7 +316,8 @@ def _from_companion(result, settings, plan, tap) -> dict | None:
         probe, took = companion.run(scale=1.0 + COMPANION_PROBE)
         if probe is None:
             return None
-        spread = relative_to_peaks(companion.moved(diff, probe), peaks, keys, families, result.system)
+        moved = change(*(a - b for a, b in zip(diff, probe)))
+        spread = relative_to_peaks(moved, peaks, keys, families, result.system)
         info.update(wall_s=wall + took, probe=COMPANION_PROBE, spread=float(max(spread, default=0.0)))
         if info["spread"] > settings.warn_error:
             return None
