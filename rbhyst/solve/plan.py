@@ -333,7 +333,7 @@ class FixedStepPlan(Plan):
                 yield k, min(chunk, int(hi) - k), int(nsub)
 
     def start_row(self, x: np.ndarray, st: np.ndarray) -> Raw:
-        """The row at t = 0 of the state _state gives."""
+        """The row at t = 0 of the state initial_state gives."""
         n = self.system.n
         return Raw(t=np.zeros(1), d=x[None, x_slice(n, 0)].copy(), v=np.zeros((1, n)),
                    u=st[None, 0, :, kernels.U].copy(), f=st[None, 0, :, kernels.F].copy(),
