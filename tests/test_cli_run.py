@@ -327,7 +327,7 @@ def test_the_kernels_run_as_plain_python_too(tmp_path, method):
     env = dict(os.environ, NUMBA_DISABLE_JIT="1")
     for name, environ in (("py", env), ("jit", None)):
         subprocess.run([sys.executable, "-m", "rbhyst", "run", str(deck), "--no-plots", "--integrator", method,
-                        "--out", str(tmp_path / name)], check=True, capture_output=True, env=environ)
+                        "--out", str(tmp_path / name)], check=True, capture_output=True, env=environ, cwd=tmp_path)
     py = np.loadtxt(tmp_path / "py" / "time_history.csv", delimiter=",", skiprows=1)
     jit = np.loadtxt(tmp_path / "jit" / "time_history.csv", delimiter=",", skiprows=1)
     np.testing.assert_allclose(py, jit, rtol=1e-9, atol=1e-12 * np.max(np.abs(jit)))

@@ -624,8 +624,9 @@ class DaskProcesses:
 
     def _start(self, name: str, *args: str) -> subprocess.Popen:
         log = open(self.folder / f"{name}-{len(self.procs)}.log", "w")
+        # (from its folder, outside the source tree: the workers import the installed package)
         p = subprocess.Popen([sys.executable, "-m", "dask", *args], stdout=log, stderr=subprocess.STDOUT,
-                             env=self.env, start_new_session=True)
+                             env=self.env, start_new_session=True, cwd=self.folder)
         log.close()
         self.procs.append(p)
         return p
@@ -671,7 +672,9 @@ class DaskProcesses:
 @pytest.fixture
 def dask_processes(tmp_path):
     pytest.importorskip("distributed")
-    procs = DaskProcesses(tmp_path, env={"PYTHONPATH": os.pathsep.join([str(Path(__file__).parent), str(ROOT)])})
+    # the tests' folder for the fault injection; rbhyst itself the installed package's (the source
+    # tree has no kernels built)
+    procs = DaskProcesses(tmp_path, env={"PYTHONPATH": str(Path(__file__).parent)})
     try:
         yield procs
     finally:
