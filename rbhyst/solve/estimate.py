@@ -289,7 +289,8 @@ COMPANION_OMEGA_DT = 1.0
 
 def _from_companion(result, settings, plan, tap) -> dict | None:
     """The estimate from the run's companion (rbhyst.solve.companion), or None where the adaptive
-    solutions must say it: a split step, an element out of its range, an estimate near the warning."""
+    solutions must say it: a step the stiffness monitor split, an element out of its range, an
+    estimate past COMPANION_LARGEST, a history the check finds undetermined."""
     from rbhyst.solve.companion import Companion
 
     stats = result.stats
