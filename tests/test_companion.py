@@ -105,6 +105,36 @@ def test_forces_re_driven_with_the_reversal_located(tmp_path):
     assert err_located < 0.05 * err_plain, (err_located, err_plain)
 
 
+def test_the_probe_repeats_the_run_and_moves_a_determined_history_in_proportion(tmp_path):
+    """The check near the warning is the run again with eps times the companion's source: with eps
+    = 0 it is the run bit for bit at the compared steps (a shock that splits steps into substeps,
+    every third step compared); a determined history moves in proportion to eps (twice as far for
+    twice eps, within 2 %), by no more than eps times its error in any column (the source is the
+    error's share from the method's formulas: the share from turns at the nodes, up to 0.6 of a
+    force's error here, it does not move)."""
+    from rbhyst.results.analysis import _companion, plan, scene
+    from rbhyst.solve.companion import Companion
+
+    data = seed_deck(duration=1.0, dt=2e-3)
+    data["excitation"] = {"support": {"x1": {"type": "half-sine", "amplitude": 20.0, "units": "g",
+                                             "duration": 0.0031, "start": 0.0507}}}
+    system, settings = scene(rbhyst.load_deck(write_deck(tmp_path, data)))
+    planned = plan(system, settings)
+    assert planned.substeps.max() > 1
+    run, tap = _companion(planned)
+    res = run.run(keep=False, tap=tap)
+    companion = Companion(planned, tap, 3)
+    moved, _ = companion.probe(0.0)
+    assert all(np.all(m == 0.0) for m in moved) and len(moved[0]) == len(res.compared[::3])
+    diff, _ = companion.run()
+    moved, _ = companion.probe(1e-3)
+    change = res.layout.largest_change
+    share = change(*moved) / (1e-3 * change(*diff))
+    assert np.all(share < 1.1) and np.max(share) > 0.9, share
+    twice = change(*companion.probe(2e-3)[0]) / change(*moved)
+    assert np.all((1.98 < twice) & (twice < 2.02)), twice
+
+
 @pytest.mark.parametrize("why", ["kr-alpha", "exact", "exact in space", "spectra", "near the warning"])
 def test_the_adaptive_solutions_take_over_where_the_companion_does_not_apply(tmp_path, why):
     data = seed_deck(duration=1.0, warn_error=0.5)

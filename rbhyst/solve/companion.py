@@ -42,7 +42,7 @@ import time
 import numpy as np
 
 from rbhyst.model.kinematics import loads_at
-from rbhyst.solve.kernels.layout import LOCATED, SMALL, x_slice
+from rbhyst.solve.kernels.layout import F, LOCATED, SMALL, x_slice
 
 #: the methods whose modified equation is written out here
 METHODS = ("chang", "central-difference", "newmark")
@@ -83,6 +83,7 @@ class RunTap:
         start = plan.start_row(x, st)
         self.a = [x[None, x_slice(plan.system.n, 2)].copy()]
         self.d, self.v, self.f = [start.d], [start.v], [start.f]
+        self.load = []  # the scene's load at every compute node (the companion's, less its source)
         self.wall_s = 0.0  # what tapping cost the run: the estimate's
 
     def __call__(self, load: np.ndarray, raw) -> None:
@@ -92,6 +93,7 @@ class RunTap:
         if self.c is not None:
             force -= raw.v @ self.c.T
         self.a.append(force * self.minv)
+        self.load.append(load if not self.load else load[1:])  # (chunks share their first node)
         self.d.append(raw.d.copy())
         self.v.append(raw.v.copy())
         self.f.append(raw.f.copy())
@@ -189,15 +191,15 @@ class Companion:
         self.offset = velocity_offset(s.integrator, *args)
         # the run at the compared steps, its velocities read on its curve
         self.rows = out_nodes[::compare_every]
-        self.d, self.v = np.concatenate(tap.d)[self.rows], v[self.rows] - self.offset[self.rows]
+        self.d, self.v_run = np.concatenate(tap.d)[self.rows], v[self.rows]
+        self.v = self.v_run - self.offset[self.rows]
         self.f = np.concatenate(tap.f)[self.rows]
+        self.load = np.concatenate(tap.load)
 
-    def run(self, scale: float = 1.0):
+    def run(self):
         """(dd, dv, df): the run's coordinates, velocities and element forces less the companion's
         at the compared steps (history.Layout.largest_change makes every column's of them), and
-        the companion's kernel seconds; None where an element's re-driven force left its range.
-        ``scale``: of the source (1: the companion; 1 + 1e-3: the check's, a perturbation a
-        thousand times smaller than the run's error)."""
+        the companion's kernel seconds; None where an element's re-driven force left its range."""
         from rbhyst.solve.kernels.compiled import kernel
 
         plan = self.plan
@@ -209,7 +211,8 @@ class Companion:
         # every turn put where it falls within its step (LOCATED): the companion's motion then
         # carries none of the run's O(h^2) branch origins, whose drift (a body that creeps under
         # cyclic load) it would otherwise share and cancel
-        for _, _, _, load, raw, took in plan.chunks(x, st, fine=True, extra=scale * self.extra, rot=LOCATED):
+        for _, _, _, load, raw, took in plan.chunks(x, st, fine=True, extra=self.extra, rot=LOCATED,
+                                                   loads=self.load):
             wall += took
             keep(load, raw)
         f = np.empty_like(keep.u)
@@ -217,6 +220,30 @@ class Companion:
             return None, wall
         rows = self.rows
         return (self.d - keep.d[rows], self.v - keep.v[rows], self.f - f[rows]), wall
+
+    def probe(self, eps: float):
+        """(dd, dv, df): how far the run moves (its coordinates, velocities and element forces at
+        the compared steps) when eps times the companion's source and starting velocity are added
+        to it, and the kernel seconds: the same stepping as the run's, its turns at the nodes. A
+        determined history moves by about eps times its error, a sensitive one by as much as the
+        error itself."""
+        plan, rows = self.plan, self.rows
+        n = plan.system.n
+        x, st = plan.initial_state()
+        x[x_slice(n, 1)] = -eps * self.offset[0]
+        d, v, f = np.empty_like(self.d), np.empty_like(self.v_run), np.empty_like(self.f)
+        d[0], v[0], f[0] = x[x_slice(n, 0)], x[x_slice(n, 1)], st[0, :, F]
+        wall, node, k = 0.0, 0, 1  # node: the compute node before the chunk's first row; k: the next row
+        for _, _, _, _, raw, took in plan.chunks(x, st, fine=True, extra=eps * self.extra, loads=self.load):
+            wall += took
+            m = len(raw.t)
+            mine = rows[k:np.searchsorted(rows, node + m, side="right")] - (node + 1)
+            if len(mine) and mine[-1] - mine[0] == len(mine) - 1:
+                mine = slice(mine[0], mine[-1] + 1)  # (every row: a copy, not a gather)
+            j = k + (len(raw.d[mine]) if isinstance(mine, slice) else len(mine))
+            d[k:j], v[k:j], f[k:j] = raw.d[mine], raw.v[mine], raw.f[mine]
+            node, k = node + m, j
+        return (np.subtract(self.d, d, out=d), np.subtract(self.v_run, v, out=v), np.subtract(self.f, f, out=f)), wall
 
 
 def _near_breaks(excitation, t: np.ndarray, h: np.ndarray) -> np.ndarray:

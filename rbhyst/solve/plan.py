@@ -340,11 +340,12 @@ class FixedStepPlan(Plan):
                    e=np.zeros((1, kernels.N_E)))
 
     def chunks(self, x: np.ndarray, st: np.ndarray, fine: bool = False, extra: np.ndarray | None = None,
-               rot: int | None = None):
+               rot: int | None = None, loads: np.ndarray | None = None):
         """Step the loop from the state (x, st) to the end, chunk by chunk: yields (first output
         step, output steps, substeps each, the chunk's load at its compute nodes, its rows (every
         compute step where ``fine``), kernel seconds). ``extra`` (compute nodes, n): a load added
-        to the scene's, ``rot`` a kinematics' code other than the system's (rbhyst.solve.companion)."""
+        to the scene's, ``rot`` a kinematics' code other than the system's, ``loads``: the scene's
+        load at every compute node, if a run has built it already (rbhyst.solve.companion)."""
         system, s = self.system, self.settings
         ne, n = self.bvec.shape
         # a chunk of compute-step rows holds at least one output step's substeps (a pulse far
@@ -353,7 +354,10 @@ class FixedStepPlan(Plan):
         node = 0  # the compute node the chunk starts at
         for first, n_out, nsub in self.segments(fine):
             t_c = s.dt * (first + np.arange(n_out * nsub + 1) / nsub)
-            load = np.ascontiguousarray(system.excitation.load_nodes(t_c, s.dt / nsub, system.mass))
+            if loads is None:
+                load = np.ascontiguousarray(system.excitation.load_nodes(t_c, s.dt / nsub, system.mass))
+            else:
+                load = loads[node:node + n_out * nsub + 1].copy()
             if extra is not None:
                 load[:, :n] += extra[node:node + n_out * nsub + 1]
             node += n_out * nsub
