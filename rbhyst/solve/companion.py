@@ -123,10 +123,16 @@ def derivatives(a: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     if len(a) < 3:
         d1[:] = 0.0
         return d1, d2
-    hl, hr = np.diff(t)[:-1, None], np.diff(t)[1:, None]
-    sl, sr = (a[1:-1] - a[:-2]) / hl, (a[2:] - a[1:-1]) / hr
-    d2[1:-1] = 2.0 * (sr - sl) / (hl + hr)
-    d1[1:-1] = (hl * sr + hr * sl) / (hl + hr)
+    h = np.diff(t)[:, None]
+    slope = np.diff(a, axis=0)
+    slope /= h
+    hl, hr, sl, sr = h[:-1], h[1:], slope[:-1], slope[1:]
+    w = 1.0 / (hl + hr)
+    np.subtract(sr, sl, out=d2[1:-1])
+    d2[1:-1] *= 2.0 * w
+    np.multiply(hl, sr, out=d1[1:-1])
+    d1[1:-1] += hr * sl
+    d1[1:-1] *= w
     h0, h1 = t[1] - t[0], t[-1] - t[-2]
     d1[0] = (-1.5 * a[0] + 2.0 * a[1] - 0.5 * a[2]) / h0
     d1[-1] = (1.5 * a[-1] - 2.0 * a[-2] + 0.5 * a[-3]) / h1
@@ -191,9 +197,10 @@ class Companion:
         self.offset = velocity_offset(s.integrator, *args)
         # the run at the compared steps, its velocities read on its curve
         self.rows = out_nodes[::compare_every]
-        self.d, self.v_run = np.concatenate(tap.d)[self.rows], v[self.rows]
-        self.v = self.v_run - self.offset[self.rows]
-        self.f = np.concatenate(tap.f)[self.rows]
+        self.take = _evenly(self.rows)
+        self.d, self.v_run = np.concatenate(tap.d)[self.take], v[self.take]
+        self.v = self.v_run - self.offset[self.take]
+        self.f = np.concatenate(tap.f)[self.take]
         self.load = np.concatenate(tap.load)
 
     def run(self):
@@ -218,7 +225,7 @@ class Companion:
         f = np.empty_like(keep.u)
         if kernel("redrive")(plan.params, st0, keep.u, f) >= 0:
             return None, wall
-        rows = self.rows
+        rows = self.take
         return (self.d - keep.d[rows], self.v - keep.v[rows], self.f - f[rows]), wall
 
     def probe(self, eps: float):
@@ -244,6 +251,13 @@ class Companion:
             d[k:j], v[k:j], f[k:j] = raw.d[mine], raw.v[mine], raw.f[mine]
             node, k = node + m, j
         return (np.subtract(self.d, d, out=d), np.subtract(self.v_run, v, out=v), np.subtract(self.f, f, out=f)), wall
+
+
+def _evenly(rows: np.ndarray):
+    """The nodes ``rows`` as a slice where they are evenly spaced (a view, not a gather)."""
+    if len(rows) > 1 and np.all(np.diff(rows) == rows[1] - rows[0]):
+        return slice(int(rows[0]), int(rows[-1]) + 1, int(rows[1] - rows[0]))
+    return rows
 
 
 def _near_breaks(excitation, t: np.ndarray, h: np.ndarray) -> np.ndarray:

@@ -106,7 +106,7 @@ def model_residual(result, start: float) -> tuple[float, str]:
     point's motion (|x| theta^2 / 2 against its peak). An indicator of where to look, not a
     bound: the response may amplify a residual."""
     from rbhyst.model.system import axial_offset
-    from rbhyst.solve.history import estimate_columns
+    from rbhyst.solve.history import estimate_columns, largest_abs
 
     system, layout = result.system, result.layout
     columns = {k: i for i, (k, _, _) in enumerate(estimate_columns(layout))}
@@ -118,19 +118,19 @@ def model_residual(result, start: float) -> tuple[float, str]:
     c = np.array([axial_offset(el.x[0], el.x[1], np.radians(el.angle_deg))
                   for el in system.elements for _ in range(el.count)])
     k0 = system.expand(system.k0[None, :])[0]
-    forces = np.column_stack([rows[:, columns[f"e{k}_f"]] for k in range(1, len(b3) + 1)])
+    forces = rows[:, [columns[f"e{k}_f"] for k in range(1, len(b3) + 1)]]
     best, where = 0.0, ""
     # each element's deformation error against its deformation (its force over k0: the rows
-    # compare forces, not deformations)
-    du = b3[None, :] * (sn - theta)[:, None] + c[None, :] * cm1[:, None]
-    scale = np.max(np.abs(forces), axis=0) / np.maximum(k0, 1e-300)
+    # compare forces, not deformations); element by element along the run, as memory runs
+    du = b3[:, None] * (sn - theta)[None, :] + c[:, None] * cm1[None, :]
+    scale = largest_abs(forces) / np.maximum(k0, 1e-300)
     with np.errstate(divide="ignore", invalid="ignore"):
-        share = np.where(scale > 0, np.max(np.abs(du), axis=0) / scale, 0.0)
+        share = np.where(scale > 0, np.abs(du).max(axis=1) / scale, 0.0)
     if share.size and share.max() > best:
         best, where = float(share.max()), f"e{int(share.argmax()) + 1}_u"
     key = system.coordinates[rot].key("R")
-    dr = np.sum(forces * (b3[None, :] * cm1[:, None] - c[None, :] * sn[:, None]), axis=1)
-    top = np.max(np.abs(rows[:, columns[key]]))
+    dr = cm1 * (forces @ b3) - sn * (forces @ c)
+    top = float(largest_abs(rows[:, [columns[key]]])[0])
     if top > 0 and np.max(np.abs(dr)) / top > best:
         best, where = float(np.max(np.abs(dr)) / top), key
     for name, x in layout.points:
