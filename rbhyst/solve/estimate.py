@@ -90,21 +90,22 @@ def relative_errors(d: np.ndarray, d_ref: np.ndarray, system: System) -> tuple[f
     return tuple(float(x) for x in column_errors(d, d_ref, keys, ["d"] * len(keys), system))
 
 
-def _to_length(key: str, system: System) -> float:
-    """What turns a column into its family's translational measure: the radius of gyration for a
-    rotation or angular acceleration (sqrt(J / m), the rotation's mass over the first
-    translation's), its inverse for a moment."""
+def _to_length(keys, system: System) -> np.ndarray:
+    """What turns each column into its family's translational measure: the radius of gyration
+    for a rotation or angular acceleration (sqrt(J / m), the rotation's mass over the first
+    translation's), its inverse for a moment; 1 for the others."""
     coords = system.coordinates
     masses = system.mass
     frame = getattr(system, "frame", None)
     if frame is not None:  # the columns are in the deck's axes: the diagonal of M there
         masses = np.einsum("ij,j,ij->i", frame, system.mass, frame)
     mass = next((masses[j] for j, c in enumerate(coords) if not c.rotation), None)
+    factor = {}
     for j, c in enumerate(coords):
-        if c.rotation and mass is not None and key in (c.key("d"), c.key("at"), c.key("R")):
+        if c.rotation and mass is not None:
             rg = math.sqrt(masses[j] / mass)
-            return 1.0 / rg if key == c.key("R") else rg
-    return 1.0
+            factor.update({c.key("d"): rg, c.key("at"): rg, c.key("R"): 1.0 / rg})
+    return np.array([factor.get(k, 1.0) for k in keys])
 
 
 def column_errors(values: np.ndarray, ref: np.ndarray, keys, families, system: System) -> np.ndarray:
@@ -121,7 +122,7 @@ def column_errors(values: np.ndarray, ref: np.ndarray, keys, families, system: S
 
 def relative_to_peaks(diff: np.ndarray, peak: np.ndarray, keys, families, system: System) -> np.ndarray:
     """column_errors from each column's largest difference and the reference's peak."""
-    length = np.array([_to_length(k, system) for k in keys])
+    length = _to_length(keys, system)
     families = np.asarray(families)
     scale = np.empty(len(keys))
     for fam in set(families.tolist()):  # (np.unique imports numpy.ma: 7 ms)

@@ -260,12 +260,20 @@ class FixedStepPlan(Plan):
         ne = self.bvec.shape[0]
         self.layout = Layout(system, s.points)
         self.chunk = min(_chunk_rows(ne, system.n, len(self.layout.names), self.nsub), self.n_steps)
+        self._initial = None  # (initial_state, computed once)
         # load (or compile) the kernel
         nsub = next(iter(self.coef))
         self._call(np.zeros((1, system.n)), 0.0, nsub, s.dt / nsub, nsub, 0, *self.initial_state(), _Buffers(1, ne, system.n))
 
     def initial_state(self):
-        """The loop's state at t = 0: at rest, elements virgin, and the initial acceleration."""
+        """The loop's state at t = 0: at rest, elements virgin, and the initial acceleration (new
+        arrays: the loop steps them in place)."""
+        if self._initial is None:
+            self._initial = self._state_at_rest()
+        x, st = self._initial
+        return x.copy(), st.copy()
+
+    def _state_at_rest(self):
         from rbhyst.model.hysteresis import virgin_tangent
 
         ne, n = self.bvec.shape
