@@ -30,7 +30,9 @@ Measured against the event-located adaptive solution at rtol 1e-12 (tests/test_a
 tests/test_companion.py): every column of the seed deck within 0.93-1.12 of its true error; of 24
 random scenes with the three methods 98.8 % of 729 columns within [0.5, 2] (0.54-4.2, the widest
 on short pulses). The companion costs one more time stepping and one pass of the elements.
-Where it does not apply (exact kinematics, KR-alpha, spectra, steps the stiffness monitor split)
+Steps the run's stiffness monitor split into substeps are split alike in the companion, its
+source taken at the substeps' h (kernels.loop: ``levels``). Where it does not apply (exact
+kinematics, KR-alpha, spectra, a step the companion's own monitor splits further than the run's)
 or where its estimate exceeds 20 %, the estimate is the adaptive solutions'
 (rbhyst.solve.estimate).
 """
@@ -84,9 +86,10 @@ class RunTap:
         self.a = [x[None, x_slice(plan.system.n, 2)].copy()]
         self.d, self.v, self.f = [start.d], [start.v], [start.f]
         self.load = []  # the scene's load at every compute node (the companion's, less its source)
+        self.levels = []  # the substep level of every compute step (the stiffness monitor's)
         self.wall_s = 0.0  # what tapping cost the run: the estimate's
 
-    def __call__(self, load: np.ndarray, raw) -> None:
+    def __call__(self, load: np.ndarray, raw, levels: np.ndarray) -> None:
         tic = time.perf_counter()
         n = len(self.minv)
         force = loads_at(load[1:], raw.d, n, self.rot) - self.layout.restoring(raw.f, raw.d)
@@ -94,6 +97,7 @@ class RunTap:
             force -= raw.v @ self.c.T
         self.a.append(force * self.minv)
         self.load.append(load if not self.load else load[1:])  # (chunks share their first node)
+        self.levels.append(levels)
         self.d.append(raw.d.copy())
         self.v.append(raw.v.copy())
         self.f.append(raw.f.copy())
@@ -190,7 +194,11 @@ class Companion:
         system, s = plan.system, plan.settings
         self.plan = plan
         a, v = np.concatenate(tap.a), np.concatenate(tap.v)
-        t, h, out_nodes = plan.compute_nodes()
+        # the steps the run's stiffness monitor split are the companion's too (its source is the
+        # method's error at the substeps' h); a step the companion's own monitor splits further
+        # leaves the estimate to the adaptive solutions
+        self.levels = np.concatenate(tap.levels)
+        t, h, out_nodes = plan.compute_nodes(self.levels)
         args = (a, v, t, h, system.mass, tap.c, system.K0, derivatives(a, t))
         self.extra = source(s.integrator, *args)
         self.extra[_near_breaks(system.excitation, t, h)] = 0.0
@@ -206,7 +214,8 @@ class Companion:
     def run(self):
         """(dd, dv, df): the run's coordinates, velocities and element forces less the companion's
         at the compared steps (history.Layout.largest_change makes every column's of them), and
-        the companion's kernel seconds; None where an element's re-driven force left its range."""
+        the companion's kernel seconds; None where an element's re-driven force left its range or
+        its stiffness monitor split a step further than the run's."""
         from rbhyst.solve.kernels.compiled import kernel
 
         plan = self.plan
@@ -218,9 +227,13 @@ class Companion:
         # every turn put where it falls within its step (LOCATED): the companion's motion then
         # carries none of the run's O(h^2) branch origins, whose drift (a body that creeps under
         # cyclic load) it would otherwise share and cancel
-        for _, _, _, load, raw, took in plan.chunks(x, st, fine=True, extra=self.extra, rot=LOCATED,
-                                                   loads=self.load):
+        node = 0
+        for _, _, _, load, raw, levels, took in plan.chunks(x, st, fine=True, extra=self.extra, rot=LOCATED,
+                                                           loads=self.load, levels=self.levels):
             wall += took
+            if not np.array_equal(levels, self.levels[node:node + len(levels)]):
+                return None, wall
+            node += len(levels)
             keep(load, raw)
         f = np.empty_like(keep.u)
         if kernel("redrive")(plan.params, st0, keep.u, f) >= 0:
@@ -233,7 +246,7 @@ class Companion:
         the compared steps) when eps times the companion's source and starting velocity are added
         to it, and the kernel seconds: the same stepping as the run's, its turns at the nodes. A
         determined history moves by about eps times its error, a sensitive one by as much as the
-        error itself."""
+        error itself. None where its stiffness monitor split a step further than the run's."""
         plan, rows = self.plan, self.rows
         n = plan.system.n
         x, st = plan.initial_state()
@@ -241,8 +254,11 @@ class Companion:
         d, v, f = np.empty_like(self.d), np.empty_like(self.v_run), np.empty_like(self.f)
         d[0], v[0], f[0] = x[x_slice(n, 0)], x[x_slice(n, 1)], st[0, :, F]
         wall, node, k = 0.0, 0, 1  # node: the compute node before the chunk's first row; k: the next row
-        for _, _, _, _, raw, took in plan.chunks(x, st, fine=True, extra=eps * self.extra, loads=self.load):
+        for _, _, _, _, raw, levels, took in plan.chunks(x, st, fine=True, extra=eps * self.extra,
+                                                         loads=self.load, levels=self.levels):
             wall += took
+            if not np.array_equal(levels, self.levels[node:node + len(levels)]):
+                return None, wall
             m = len(raw.t)
             mine = rows[k:np.searchsorted(rows, node + m, side="right")] - (node + 1)
             if len(mine) and mine[-1] - mine[0] == len(mine) - 1:

@@ -290,12 +290,13 @@ COMPANION_OMEGA_DT = 1.0
 
 def _from_companion(result, settings, plan, tap) -> dict | None:
     """The estimate from the run's companion (rbhyst.solve.companion), or None where the adaptive
-    solutions must say it: a step the stiffness monitor split, an element out of its range, an
-    estimate past COMPANION_LARGEST, a history the check finds undetermined."""
+    solutions must say it: a step the companion's stiffness monitor split where the run's did not,
+    an element out of its range, an estimate past COMPANION_LARGEST, a history the check finds
+    undetermined."""
     from rbhyst.solve.companion import Companion
 
     stats = result.stats
-    if stats.substeps > 0 or stats.max_omega_dt > COMPANION_OMEGA_DT:
+    if stats.max_omega_dt > COMPANION_OMEGA_DT:
         return None
     cols = estimate_columns(result.layout)
     keys, families = [k for k, _, _ in cols], [f for _, _, f in cols]
@@ -316,6 +317,8 @@ def _from_companion(result, settings, plan, tap) -> dict | None:
         # companion's source added: a determined history moves by that fraction of the error, a
         # sensitive one as much as the run itself (then the adaptive solutions say how much)
         moved, took = companion.probe(COMPANION_PROBE)
+        if moved is None:
+            return None
         spread = relative_to_peaks(change(*moved), peaks, keys, families, result.system)
         info.update(wall_s=wall + took, probe=COMPANION_PROBE, spread=float(max(spread, default=0.0)))
         if info["spread"] > settings.warn_error:

@@ -297,10 +297,11 @@ class FixedStepPlan(Plan):
         x[X_CUR] = 0
         return x, st
 
-    def _call(self, load, t0, nsub, h_c, rows_every, n, x, st, buf, rot=None):
+    def _call(self, load, t0, nsub, h_c, rows_every, n, x, st, buf, rot=None, levels=None, force=False):
         """n rows of the loop: compute steps of h_c with the coefficients of ``nsub`` substeps a
         step of dt, a row after every ``rows_every``-th of them (``rot``: the kinematics' code,
-        if not the system's: kernels.layout.LOCATED)."""
+        if not the system's: kernels.layout.LOCATED). ``levels`` (compute steps,): receives each
+        step's substep level; with ``force`` each starts from the level it holds."""
         from rbhyst.solve.kernels.compiled import kernel
 
         s = self.settings
@@ -308,6 +309,10 @@ class FixedStepPlan(Plan):
         if n > len(buf.d):  # the compiled loop checks no bounds: never let it write past a buffer
             raise RuntimeError(f"a chunk of {n} rows does not fit its buffers of {len(buf.d)}")
         self.info = np.zeros(kernels.INFO_SIZE)
+        if levels is None:
+            levels = np.empty(n * rows_every, dtype=np.int64)
+        if len(levels) < n * rows_every:
+            raise RuntimeError(f"{len(levels)} levels for a chunk of {n * rows_every} compute steps")
         # M and M^-1 as tuples: their length n is then a constant of the compiled loop (one
         # compilation per n), which unrolls every loop over the coordinates
         return kernel("run_chunk", n_q)(self.method.kernel_id, self.coef[nsub], tuple(self.system.mass), tuple(self.minv),
@@ -318,18 +323,21 @@ class FixedStepPlan(Plan):
                                         t0, h_c, rows_every, n, s.max_omega_dt, self.level0[nsub], s.max_substep_level,
                                         s.newton_tol, s.newton_max_iter, x, st, np.zeros((ne, N_STATE)), np.zeros((ne, 2)),
                                         np.zeros((ne, n_q)), np.zeros((N_W, n_q)), np.zeros((n_q, n_q)), buf.d, buf.v, buf.u, buf.f, buf.e,
-                                        self.info)
+                                        levels, force, self.info)
 
-    def compute_nodes(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def compute_nodes(self, levels: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(t, h, out): every compute node's time from 0, the step the loop takes after it
-        (dt / substeps / 2^level0, the last node's the one before it), and the node of every
-        output step."""
+        (dt / substeps / 2^level: level0, or each compute step's ``levels`` as a run took them;
+        the last node's the one before it), and the node of every output step."""
         s = self.settings
         t = np.concatenate([[0.0], compute_times(self.bounds, self.substeps, s.dt)])
         lengths = np.diff(self.bounds)
         out = np.concatenate([[0], np.cumsum(np.repeat(self.substeps, lengths))])
-        step = np.array([s.dt / m / 2.0 ** self.level0[int(m)] for m in self.substeps])
-        h = np.repeat(step, lengths * self.substeps)
+        if levels is None:
+            step = np.array([s.dt / m / 2.0 ** self.level0[int(m)] for m in self.substeps])
+            h = np.repeat(step, lengths * self.substeps)
+        else:
+            h = np.repeat(s.dt / self.substeps, lengths * self.substeps) / 2.0 ** levels
         return t, np.append(h, h[-1:]), out
 
     def segments(self, fine: bool = False):
@@ -348,12 +356,14 @@ class FixedStepPlan(Plan):
                    e=np.zeros((1, kernels.N_E)))
 
     def chunks(self, x: np.ndarray, st: np.ndarray, fine: bool = False, extra: np.ndarray | None = None,
-               rot: int | None = None, loads: np.ndarray | None = None):
+               rot: int | None = None, loads: np.ndarray | None = None, levels: np.ndarray | None = None):
         """Step the loop from the state (x, st) to the end, chunk by chunk: yields (first output
         step, output steps, substeps each, the chunk's load at its compute nodes, its rows (every
-        compute step where ``fine``), kernel seconds). ``extra`` (compute nodes, n): a load added
-        to the scene's, ``rot`` a kinematics' code other than the system's, ``loads``: the scene's
-        load at every compute node, if a run has built it already (rbhyst.solve.companion)."""
+        compute step where ``fine``), each compute step's substep level, kernel seconds).
+        ``extra`` (compute nodes, n): a load added to the scene's, ``rot`` a kinematics' code
+        other than the system's, ``loads``: the scene's load at every compute node, if a run has
+        built it already, ``levels`` (compute steps,): the substep level each step starts from
+        (the levels a run took: rbhyst.solve.companion)."""
         system, s = self.system, self.settings
         ne, n = self.bvec.shape
         # a chunk of compute-step rows holds at least one output step's substeps (a pulse far
@@ -368,17 +378,20 @@ class FixedStepPlan(Plan):
                 load = loads[node:node + n_out * nsub + 1].copy()
             if extra is not None:
                 load[:, :n] += extra[node:node + n_out * nsub + 1]
-            node += n_out * nsub
+            steps = n_out * nsub
+            level = np.empty(steps, dtype=np.int64) if levels is None else levels[node:node + steps].copy()
+            node += steps
             sub = nsub if fine else 1
             tic = time.perf_counter()
-            written = self._call(load, s.dt * first, nsub, s.dt / nsub, nsub // sub, n_out * sub, x, st, buf, rot)
+            written = self._call(load, s.dt * first, nsub, s.dt / nsub, nsub // sub, n_out * sub, x, st, buf, rot,
+                                 level, levels is not None)
             wall = time.perf_counter() - tic
             _raise_on_failure(system, s, self.info)
             assert written == n_out * sub, "the loop wrote fewer rows than asked"
             t = t_c[1:] if sub > 1 else s.dt * (first + 1 + np.arange(n_out))  # t_n = n dt, never accumulated
             m = n_out * sub
             yield first, n_out, nsub, load, Raw(t=t, d=buf.d[:m], v=buf.v[:m], u=buf.u[:m], f=buf.f[:m],
-                                                 e=buf.e[:m]), wall
+                                                 e=buf.e[:m]), level, wall
 
     def run(self, keep: bool = True, csv=None, compare_every: int | None = None, progress=None,
             tap=None) -> Result:
@@ -396,10 +409,10 @@ class FixedStepPlan(Plan):
         wall = 0.0
         try:
             rows.add(self.start_row(x, st))
-            for first, n_out, nsub, load, raw, took in self.chunks(x, st, fine):
+            for first, n_out, nsub, load, raw, levels, took in self.chunks(x, st, fine):
                 wall += took
                 if tap is not None:
-                    tap(load, raw)
+                    tap(load, raw, levels)
                 sub = nsub if fine else 1
                 if sub > 1 and not spectra:  # (for the tap only: the rows are the output steps')
                     raw, sub = raw.slice(sub - 1, None, sub), 1

@@ -35,7 +35,7 @@ def _fail(info, status, element, t):
 @njit(cache=True, error_model="numpy", _nrt=False)
 def run_chunk(method, coef, mass, minv, cm, damped, bvec, axial, rot, mult, params, wgt,
               load, t0, h_c, nsub_c, n_steps, omega_dt_limit, min_level, max_level, newton_tol, newton_max_iter,
-              x, st, st_save, kpeak, bq, w, wm, out_d, out_v, out_u, out_f, out_e, info):
+              x, st, st_save, kpeak, bq, w, wm, out_d, out_v, out_u, out_f, out_e, levels, force, info):
     """Advance the state x, st over n_steps output steps of nsub_c compute steps of h_c each.
 
     mass, minv: the diagonals of M and M^-1 as tuples of n (n is their length). wgt (ne,): each
@@ -49,6 +49,10 @@ def run_chunk(method, coef, mass, minv, cm, damped, bvec, axial, rot, mult, para
     Every compute step is split into at least 2**min_level substeps (a structure-dependent
     method needs omega_0 h within the limit too, see simulate.min_level). A step whose Newton
     iterations fail is retried, like a stiff one, with twice the substeps.
+    levels (n_steps * nsub_c,): each compute step's substep level as accepted (2**level
+    substeps); with ``force`` it is read first as the level each step starts from, in place of
+    the monitor's (a companion run that splits the steps its run split: rbhyst.solve.companion;
+    a step the monitor still rejects takes more, and says so there).
     Rows hold no acceleration: the caller takes it from the equation of motion at the row's
     state and time (rbhyst.solve.history.Layout), never from a method's own variable (KR-alpha's
     is a(t) + O(h); any method's carries the load averaged over a step near a jump).
@@ -83,7 +87,7 @@ def run_chunk(method, coef, mass, minv, cm, damped, bvec, axial, rot, mult, para
         # substep has changed nothing, so it is copied only where there are several
         s_in, s_hyst, s_visc, s_cur = e_in, e_hyst, e_visc, cur
         saved = False
-        level = max(level - 1, min_level)
+        level = max(levels[j] if force else level - 1, min_level)
         while True:
             nsub = 1 << level
             if nsub > 1 and not saved:
@@ -167,6 +171,7 @@ def run_chunk(method, coef, mass, minv, cm, damped, bvec, axial, rot, mult, para
                 if level > 0:
                     substeps += nsub
                     level_used = max(level_used, level)
+                levels[j] = level
                 break
             # restart the compute step with twice as many substeps
             e_in, e_hyst, e_visc = s_in, s_hyst, s_visc
