@@ -135,6 +135,31 @@ def test_the_probe_repeats_the_run_and_moves_a_determined_history_in_proportion(
     assert np.all((1.98 < twice) & (twice < 2.02)), twice
 
 
+@pytest.mark.parametrize("method", METHODS)
+def test_steps_the_stiffness_monitor_split_are_split_alike_in_the_companion(tmp_path, method):
+    """A random scene of the tests whose stiffening elements make the monitor split 352 compute
+    steps into substeps: the companion, given the run's levels, repeats the run bit for bit with
+    no source (the probe at eps = 0), and its estimate is every column's true error within
+    [0.75, 1.25] (the companion's source at the substeps' h: taken at the compute step's, the
+    split steps' error would read 4 to 4^k times too large)."""
+    from test_accuracy import random_scene
+
+    from rbhyst.results.analysis import _companion, plan, scene
+    from rbhyst.solve.companion import Companion
+
+    path = write_deck(tmp_path, random_scene(np.random.default_rng(1021)))
+    res = rbhyst.run(path, integrator=method)
+    assert res.stats.substeps > 0 and "companion" in res.accuracy
+    r = ratios(res)
+    assert all(0.75 <= v <= 1.25 for v in r.values()), r
+    system, settings = scene(rbhyst.load_deck(path), integrator=method)
+    planned = plan(system, settings)
+    run, tap = _companion(planned)
+    out = run.run(keep=False, tap=tap)
+    moved, _ = Companion(planned, tap, out.compare_every).probe(0.0)
+    assert all(np.all(m == 0.0) for m in moved)
+
+
 @pytest.mark.parametrize("why", ["kr-alpha", "exact", "exact in space", "spectra", "near the warning"])
 def test_the_adaptive_solutions_take_over_where_the_companion_does_not_apply(tmp_path, why):
     data = seed_deck(duration=1.0, warn_error=0.5)
