@@ -107,12 +107,24 @@ def test_an_adaptive_run_estimates_itself(tmp_path):
 
 def test_a_warned_run_is_checked_against_a_second_solution(tmp_path):
     """An estimate near or above warn_error: the solution 100 times looser says whether a smaller dt
-    would do (the history determined: status estimated, the spread far below the error) or not."""
-    res = rbhyst.run(write_deck(tmp_path, scene("coarse")))
+    would do (the history determined: status estimated, the spread far below the error) or not
+    (KR-alpha: estimated by the adaptive solutions, not by a companion)."""
+    res = rbhyst.run(write_deck(tmp_path, scene("coarse")), integrator="kr-alpha")
     acc = res.accuracy
     assert estimated(res) > 0.01 and acc["status"] == "estimated"
     assert acc["reference"]["check_rtol"] == pytest.approx(100 * acc["reference"]["rtol"])
     assert max(acc["reference_spread"].values()) < 1e-3 * estimated(res)
+    assert 0.5 <= estimated(res) / true_error(res) <= 10.0
+
+
+def test_a_warned_run_is_checked_by_its_probe(tmp_path):
+    """The same with chang, whose companion estimates it: the run again with 1e-3 of the
+    companion's source moves by about 1e-3 of the error (a determined history), and the estimate
+    is the truth's within [0.5, 10]."""
+    res = rbhyst.run(write_deck(tmp_path, scene("coarse")))
+    acc = res.accuracy
+    assert estimated(res) > 0.01 and acc["status"] == "estimated"
+    assert acc["companion"]["probe"] == 1e-3 and acc["companion"]["spread"] < 3e-3 * estimated(res)
     assert 0.5 <= estimated(res) / true_error(res) <= 10.0
 
 

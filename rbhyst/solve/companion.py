@@ -31,10 +31,11 @@ tests/test_companion.py): every column of the seed deck within 0.93-1.12 of its 
 random scenes with the three methods 98.8 % of 729 columns within [0.5, 2] (0.54-4.2, the widest
 on short pulses). The companion costs one more time stepping and one pass of the elements.
 Steps the run's stiffness monitor split into substeps are split alike in the companion, its
-source taken at the substeps' h (kernels.loop: ``levels``). Where it does not apply (exact
-kinematics, KR-alpha, spectra, a step the companion's own monitor splits further than the run's)
-or where its estimate exceeds 20 %, the estimate is the adaptive solutions'
-(rbhyst.solve.estimate).
+source taken at the substeps' h (kernels.loop: ``levels``; its own monitor does not judge again:
+its states are the run's within the run's error, and a step split otherwise would carry another
+error than the one its source takes out). Where it does not apply (exact kinematics, KR-alpha,
+spectra, a step whose Newton iterations fail in the companion where the run's converged) or
+where its estimate exceeds 20 %, the estimate is the adaptive solutions' (rbhyst.solve.estimate).
 """
 
 from __future__ import annotations
@@ -195,8 +196,7 @@ class Companion:
         self.plan = plan
         a, v = np.concatenate(tap.a), np.concatenate(tap.v)
         # the steps the run's stiffness monitor split are the companion's too (its source is the
-        # method's error at the substeps' h); a step the companion's own monitor splits further
-        # leaves the estimate to the adaptive solutions
+        # method's error at the substeps' h)
         self.levels = np.concatenate(tap.levels)
         t, h, out_nodes = plan.compute_nodes(self.levels)
         args = (a, v, t, h, system.mass, tap.c, system.K0, derivatives(a, t))
@@ -215,7 +215,7 @@ class Companion:
         """(dd, dv, df): the run's coordinates, velocities and element forces less the companion's
         at the compared steps (history.Layout.largest_change makes every column's of them), and
         the companion's kernel seconds; None where an element's re-driven force left its range or
-        its stiffness monitor split a step further than the run's."""
+        Newton's iterations split a step further than the run's."""
         from rbhyst.solve.kernels.compiled import kernel
 
         plan = self.plan
@@ -246,7 +246,7 @@ class Companion:
         the compared steps) when eps times the companion's source and starting velocity are added
         to it, and the kernel seconds: the same stepping as the run's, its turns at the nodes. A
         determined history moves by about eps times its error, a sensitive one by as much as the
-        error itself. None where its stiffness monitor split a step further than the run's."""
+        error itself. None where Newton's iterations split a step further than the run's."""
         plan, rows = self.plan, self.rows
         n = plan.system.n
         x, st = plan.initial_state()

@@ -290,8 +290,8 @@ COMPANION_OMEGA_DT = 1.0
 
 def _from_companion(result, settings, plan, tap) -> dict | None:
     """The estimate from the run's companion (rbhyst.solve.companion), or None where the adaptive
-    solutions must say it: a step the companion's stiffness monitor split where the run's did not,
-    an element out of its range, an estimate past COMPANION_LARGEST, a history the check finds
+    solutions must say it: a step whose Newton iterations failed in the companion where the run's
+    converged, an element out of its range, an estimate past COMPANION_LARGEST, a history the check finds
     undetermined."""
     from rbhyst.solve.companion import Companion
 

@@ -50,9 +50,9 @@ def run_chunk(method, coef, mass, minv, cm, damped, bvec, axial, rot, mult, para
     method needs omega_0 h within the limit too, see simulate.min_level). A step whose Newton
     iterations fail is retried, like a stiff one, with twice the substeps.
     levels (n_steps * nsub_c,): each compute step's substep level as accepted (2**level
-    substeps); with ``force`` it is read first as the level each step starts from, in place of
-    the monitor's (a companion run that splits the steps its run split: rbhyst.solve.companion;
-    a step the monitor still rejects takes more, and says so there).
+    substeps); with ``force`` each step takes the level it holds, the stiffness monitor's
+    judgement aside (a companion run steps as its run stepped, within its error of the run's
+    states: rbhyst.solve.companion; only Newton's failure still splits a step further).
     Rows hold no acceleration: the caller takes it from the equation of motion at the row's
     state and time (rbhyst.solve.history.Layout), never from a method's own variable (KR-alpha's
     is a(t) + O(h); any method's carries the load averaged over a step near a jump).
@@ -126,7 +126,7 @@ def run_chunk(method, coef, mass, minv, cm, damped, bvec, axial, rot, mult, para
                             acc += bq[e, i] * bq[e, i] * minv[i]
                         wgt[e] = acc
                 lam, worst = omega_squared(mult, kpeak, wgt)
-                if lam * h * h > limit2:
+                if lam * h * h > limit2 and not force:
                     lam = omega_squared_exact(bq if rot >= 0 or rot == SPATIAL else bvec, mult, minv, kpeak, wm, w[W_Q])
                     if lam * h * h > limit2:
                         if level >= max_level:
