@@ -121,72 +121,6 @@ class CompanionRows:
         self.next = k + m
 
 
-def derivatives(a: np.ndarray, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(A', A'') at the nodes t from the values there (three-point differences on an uneven grid;
-    one-sided second-order at the ends for A', zero for A'' there)."""
-    d1, d2 = np.empty_like(a), np.zeros_like(a)
-    if len(a) < 3:
-        d1[:] = 0.0
-        return d1, d2
-    h = np.diff(t)[:, None]
-    slope = np.diff(a, axis=0)
-    slope /= h
-    hl, hr, sl, sr = h[:-1], h[1:], slope[:-1], slope[1:]
-    w = 1.0 / (hl + hr)
-    np.subtract(sr, sl, out=d2[1:-1])
-    d2[1:-1] *= 2.0 * w
-    np.multiply(hl, sr, out=d1[1:-1])
-    d1[1:-1] += hr * sl
-    d1[1:-1] *= w
-    h0, h1 = t[1] - t[0], t[-1] - t[-2]
-    d1[0] = (-1.5 * a[0] + 2.0 * a[1] - 0.5 * a[2]) / h0
-    d1[-1] = (1.5 * a[-1] - 2.0 * a[-2] + 0.5 * a[-3]) / h1
-    return d1, d2
-
-
-def source(method: str, a: np.ndarray, v: np.ndarray, t: np.ndarray, h: np.ndarray, mass: np.ndarray,
-           c: np.ndarray | None, k0: np.ndarray, d=None) -> np.ndarray:
-    """(nodes, n) -S at the nodes t, h the step the loop takes there: the load that takes the
-    method's leading error out (module docstring). d: derivatives(a, t), if at hand."""
-    d1, d2 = derivatives(a, t) if d is None else d
-    hh = (h * h)[:, None]
-    if method == "newmark":
-        out = -hh * d2 * mass / 6.0
-        if c is not None:
-            out -= hh / 12.0 * (d1 @ c.T)
-    elif method == "central-difference":
-        out = hh * d2 * mass / 12.0
-        if c is not None:
-            out += hh / 6.0 * (d1 @ c.T)
-    else:  # chang
-        out = hh * (d2 * mass / 12.0 + 0.25 * (a @ k0.T))
-        if c is not None:
-            out += hh * ((5.0 / 12.0) * (d1 @ c.T) + 0.25 * (((a @ c.T + v @ k0.T) / mass) @ c.T))
-    return out
-
-
-def velocity_offset(method: str, a: np.ndarray, v: np.ndarray, t: np.ndarray, h: np.ndarray,
-                    mass: np.ndarray, c: np.ndarray | None, k0: np.ndarray, d=None) -> np.ndarray:
-    """(nodes, n) q' - V: how far the method's velocity is from the derivative of the smooth
-    curve its nodes lie on (the same expansion as ``source``):
-
-        newmark  h^2 A'/12,   central difference  -h^2 A'/6,
-        chang    -h^2 [A'/6 + M^-1 (C A + K0 V)/4].
-
-    The run starts at rest with V = 0, so its curve starts with q' = this: the companion starts
-    with the opposite velocity, and its velocities are read as V + this."""
-    d1, _ = derivatives(a, t) if d is None else d
-    hh = (h * h)[:, None]
-    if method == "newmark":
-        return hh * d1 / 12.0
-    if method == "central-difference":
-        return -hh * d1 / 6.0
-    out = -hh * (d1 / 6.0 + 0.25 * (v @ k0.T) / mass)
-    if c is not None:
-        out -= hh * 0.25 * (a @ c.T) / mass
-    return out
-
-
 class Companion:
     """The run's companion, ready to step: its load (-S at every compute node, none within a step of
     a signal's corner) and starting velocity worked out once from the run's tap."""
@@ -199,10 +133,8 @@ class Companion:
         # method's error at the substeps' h)
         self.levels = np.concatenate(tap.levels)
         t, h, out_nodes = plan.compute_nodes(self.levels)
-        args = (a, v, t, h, system.mass, tap.c, system.K0, derivatives(a, t))
-        self.extra = source(s.integrator, *args)
-        self.extra[_near_breaks(system.excitation, t, h)] = 0.0
-        self.offset = velocity_offset(s.integrator, *args)
+        self.extra, self.offset = source_and_offset(s.integrator, a, v, t, h, system.mass, tap.c, system.K0,
+                                                    _near_breaks(system.excitation, t, h))
         # the run at the compared steps, its velocities read on its curve
         self.rows = out_nodes[::compare_every]
         self.take = _evenly(self.rows)
@@ -267,6 +199,34 @@ class Companion:
             d[k:j], v[k:j], f[k:j] = raw.d[mine], raw.v[mine], raw.f[mine]
             node, k = node + m, j
         return (np.subtract(self.d, d, out=d), np.subtract(self.v_run, v, out=v), np.subtract(self.f, f, out=f)), wall
+
+
+def source_and_offset(method: str, a: np.ndarray, v: np.ndarray, t: np.ndarray, h: np.ndarray,
+                      mass: np.ndarray, c: np.ndarray | None, k0: np.ndarray, near: np.ndarray):
+    """(-S, q' - V), each (nodes, n): the load that takes the method's leading error out (the
+    module docstring's S), none at the nodes ``near``, and how far the method's velocity is from
+    the derivative of the smooth curve its nodes lie on (the same expansion), from its
+    accelerations a and velocities v at the nodes t, h the step the loop takes after each
+    (rbhyst.solve.kernels.modified, one compiled pass):
+
+        newmark  h^2 A'/12,   central difference  -h^2 A'/6,
+        chang    -h^2 [A'/6 + M^-1 (C A + K0 V)/4].
+
+    The run starts at rest with V = 0, so its curve starts with q' = the offset: the companion
+    starts with the opposite velocity, and its velocities are read as V + the offset."""
+    from rbhyst.solve.kernels.compiled import kernel
+    from rbhyst.solve.kernels.modified import CODES
+
+    n = a.shape[1]
+    extra, offset = np.empty_like(a), np.empty_like(a)
+    damped = c is not None
+    kernel("modified")(CODES[method], np.ascontiguousarray(a, dtype=float), np.ascontiguousarray(v, dtype=float),
+                       np.ascontiguousarray(t, dtype=float), np.ascontiguousarray(h, dtype=float),
+                       np.ascontiguousarray(mass, dtype=float),
+                       np.ascontiguousarray(c, dtype=float) if damped else np.zeros((n, n)), damped,
+                       np.ascontiguousarray(k0, dtype=float), np.ascontiguousarray(near, dtype=bool), extra, offset,
+                       np.empty(n), np.empty(n), np.empty(n))
+    return extra, offset
 
 
 def _evenly(rows: np.ndarray):

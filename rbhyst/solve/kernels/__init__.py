@@ -7,8 +7,10 @@
   chunked output); a method's own step lives beside its coefficients in
   :mod:`rbhyst.solve.integrators`;
 - :mod:`.dop853`: the adaptive integration; :mod:`.csvfmt`: CSV text; :mod:`.reduce`: peaks;
+- :mod:`.modified`, :mod:`.redrive`: the error estimate's companion (its load from the
+  method's modified equation; its forces with every reversal located);
 - :mod:`.compiled`: the kernels built ahead of time at install, or numba's JIT.
 
-Everything here is called through :mod:`rbhyst.solve.plan`. Importing this package loads no
-compiled code.
+Everything here is called through :mod:`rbhyst.solve.plan` and :mod:`rbhyst.solve.companion`.
+Importing this package loads no compiled code.
 """

@@ -20,7 +20,7 @@ PACKAGE = Path(__file__).resolve().parents[2]
 #: every source file whose code (or constants) the exported kernels compile in
 SOURCES = ("model/hysteresis.py", "model/vrm.py", "model/signals.py", "solve/kernels/layout.py",
            "solve/kernels/elements.py", "solve/kernels/rotations.py", "solve/kernels/loop.py", "solve/kernels/csvfmt.py", "solve/kernels/reduce.py",
-           "solve/kernels/redrive.py",
+           "solve/kernels/redrive.py", "solve/kernels/modified.py",
            "solve/kernels/dop853.py", "solve/kernels/dop853_layout.py", "solve/integrators/steps.py",
            "solve/integrators/chang.py", "solve/integrators/central_difference.py", "solve/integrators/kr_alpha.py",
            "solve/integrators/newmark.py")
@@ -47,6 +47,9 @@ EXPORTS = {
                   "i8(f8[:,::1], i8[:,::1], i8[:,::1], i1[:,::1], f8[::1])"),
     "render": ("rbhyst.solve.kernels.csvfmt", "_render", "i8(f8[:,::1], i8[:,::1], i8[:,::1], i1[:,::1], u1[::1], i8[::1])"),
     "redrive": ("rbhyst.solve.kernels.redrive", "redrive", "i8(f8[:,:,::1], f8[:,::1], f8[:,::1], f8[:,::1])"),
+    "modified": ("rbhyst.solve.kernels.modified", "source_and_offset",
+                 "void(i8, f8[:,::1], f8[:,::1], f8[::1], f8[::1], f8[::1], f8[:,::1], b1, f8[:,::1], b1[::1], "
+                 "f8[:,::1], f8[:,::1], f8[::1], f8[::1], f8[::1])"),
     "reduce_rows": ("rbhyst.solve.kernels.reduce", "reduce_rows",
                     "void(f8[:,:], i8, i8, f8[::1], f8[::1], f8[::1], f8[::1], f8[:,::1], f8[:,::1], "
                     "f8[::1], f8[::1])"),

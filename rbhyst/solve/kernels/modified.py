@@ -1,0 +1,79 @@
+"""The companion's load and starting velocity from a run's accelerations, in one pass over its
+compute nodes (rbhyst.solve.companion states the formulas and what they come from).
+
+A' and A'' by three-point differences on the uneven grid of the nodes (one-sided second-order
+at the ends for A', zero for A'' there); then at every node, with hh = h^2 of the step the
+loop takes after it,
+
+    newmark             -S = -hh M A''/6 - hh C A'/12,            q' - V = hh A'/12
+    central difference  -S = hh M A''/12 + hh C A'/6,             q' - V = -hh A'/6
+    chang               -S = hh [M A''/12 + K0 A/4 + 5/12 C A'      q' - V = -hh [A'/6 + M^-1 (C A + K0 V)/4]
+                              + C M^-1 (C A + K0 V)/4],
+"""
+
+from __future__ import annotations
+
+from numba import njit
+
+NEWMARK, CENTRAL_DIFFERENCE, CHANG = 0, 1, 2
+#: rbhyst.solve.integrators' names of the methods written out here
+CODES = {"newmark": NEWMARK, "central-difference": CENTRAL_DIFFERENCE, "chang": CHANG}
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def source_and_offset(method, a, v, t, h, mass, c, damped, k0, near, extra, offset, d1, d2, w1):
+    """extra (N, n) = -S at the nodes (0 where ``near``), offset (N, n) = q' - V (module
+    docstring) from the method's accelerations a and velocities v (N, n) at the nodes t, h the
+    step after each; c: C (any (n, n) where not ``damped``). d1, d2, w1 (n,): work space."""
+    nn, n = a.shape
+    for i in range(nn):
+        for j in range(n):
+            if nn < 3:
+                d1[j] = 0.0
+                d2[j] = 0.0
+            elif i == 0:
+                d1[j] = (-1.5 * a[0, j] + 2.0 * a[1, j] - 0.5 * a[2, j]) / (t[1] - t[0])
+                d2[j] = 0.0
+            elif i == nn - 1:
+                d1[j] = (1.5 * a[i, j] - 2.0 * a[i - 1, j] + 0.5 * a[i - 2, j]) / (t[i] - t[i - 1])
+                d2[j] = 0.0
+            else:
+                hl = t[i] - t[i - 1]
+                hr = t[i + 1] - t[i]
+                sl = (a[i, j] - a[i - 1, j]) / hl
+                sr = (a[i + 1, j] - a[i, j]) / hr
+                d2[j] = 2.0 * (sr - sl) / (hl + hr)
+                d1[j] = (hl * sr + hr * sl) / (hl + hr)
+        hh = h[i] * h[i]
+        if method == CHANG:
+            # w1 = M^-1 (C A + K0 V)
+            for j in range(n):
+                acc = 0.0
+                for k in range(n):
+                    acc += k0[j, k] * v[i, k]
+                    if damped:
+                        acc += c[j, k] * a[i, k]
+                w1[j] = acc / mass[j]
+            for j in range(n):
+                ka = 0.0
+                cc = 0.0
+                for k in range(n):
+                    ka += k0[j, k] * a[i, k]
+                    if damped:
+                        cc += c[j, k] * ((5.0 / 12.0) * d1[k] + 0.25 * w1[k])
+                extra[i, j] = hh * (d2[j] * mass[j] / 12.0 + 0.25 * ka + cc)
+                offset[i, j] = -hh * (d1[j] / 6.0 + 0.25 * w1[j])
+        else:
+            sign = -1.0 if method == NEWMARK else 1.0
+            fm = 1.0 / 6.0 if method == NEWMARK else 1.0 / 12.0
+            fc = 1.0 / 12.0 if method == NEWMARK else 1.0 / 6.0
+            for j in range(n):
+                cd = 0.0
+                if damped:
+                    for k in range(n):
+                        cd += c[j, k] * d1[k]
+                extra[i, j] = sign * hh * (fm * d2[j] * mass[j] + fc * cd)
+                offset[i, j] = -sign * hh * d1[j] * (1.0 / 12.0 if method == NEWMARK else 1.0 / 6.0)
+        if near[i]:
+            for j in range(n):
+                extra[i, j] = 0.0
