@@ -882,8 +882,12 @@ def entry() -> None:
 
     Tearing down numba's and matplotlib's modules costs 0.15-0.25 s after every command and
     gives nothing back: the files are closed and flushed by then. A signal that arrives
-    after the command has finished is ignored.
+    after the command has finished is ignored. The allocator keeps freed memory for the next
+    array (rbhyst.allocator).
     """
+    from rbhyst.allocator import keep_freed_memory
+
+    keep_freed_memory()
     try:
         main()
         code = 0

@@ -31,9 +31,12 @@ def installed(env_extra: dict, deck: str, method: str, tmp_path):
     return json.loads(out.stdout.splitlines()[-1])
 
 
-@pytest.mark.parametrize("method", ["chang", "newmark", "adaptive"])
-def test_ahead_of_time_equals_jit_and_loads_no_numba(tmp_path, method):
-    deck = str(DECKS / "machine_on_mounts.toml")
+@pytest.mark.parametrize("deck, method", [("machine_on_mounts.toml", "chang"), ("machine_on_mounts.toml", "newmark"),
+                                          ("machine_on_mounts.toml", "adaptive"), ("seed_wri.toml", "chang")])
+def test_ahead_of_time_equals_jit_and_loads_no_numba(tmp_path, deck, method):
+    """The machine with exact rotations (its estimate the adaptive solutions'), and the seed deck,
+    whose estimate is its companion's (the run's modified equation, the re-driven forces)."""
+    deck = str(DECKS / deck)
     aot = installed({}, deck, method, tmp_path)
     if aot is None:
         pytest.skip("the installed rbhyst has no kernels built ahead of time (an editable install, or no compiler)")

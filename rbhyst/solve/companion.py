@@ -45,10 +45,10 @@ import time
 import numpy as np
 
 from rbhyst.model.kinematics import loads_at
-from rbhyst.solve.kernels.layout import F, LOCATED, SMALL, x_slice
+from rbhyst.solve.kernels.layout import F, LOCATED, MODIFIED, SMALL, x_slice
 
 #: the methods whose modified equation is written out here
-METHODS = ("chang", "central-difference", "newmark")
+METHODS = tuple(MODIFIED)
 #: the companion keeps every compute step's deformations: at most this many values
 MAX_VALUES = 20_000_000
 
@@ -215,12 +215,11 @@ def source_and_offset(method: str, a: np.ndarray, v: np.ndarray, t: np.ndarray, 
     The run starts at rest with V = 0, so its curve starts with q' = the offset: the companion
     starts with the opposite velocity, and its velocities are read as V + the offset."""
     from rbhyst.solve.kernels.compiled import kernel
-    from rbhyst.solve.kernels.modified import CODES
 
     n = a.shape[1]
     extra, offset = np.empty_like(a), np.empty_like(a)
     damped = c is not None
-    kernel("modified")(CODES[method], np.ascontiguousarray(a, dtype=float), np.ascontiguousarray(v, dtype=float),
+    kernel("modified")(MODIFIED[method], np.ascontiguousarray(a, dtype=float), np.ascontiguousarray(v, dtype=float),
                        np.ascontiguousarray(t, dtype=float), np.ascontiguousarray(h, dtype=float),
                        np.ascontiguousarray(mass, dtype=float),
                        np.ascontiguousarray(c, dtype=float) if damped else np.zeros((n, n)), damped,

@@ -17,33 +17,12 @@ from typing import Any
 import numpy as np
 
 from rbhyst._version import __version__
+from rbhyst.allocator import keep_freed_memory
 from rbhyst.errors import AnalysisError, InputError
 
 _bases: dict[str, Any] = {}
 #: a local worker's place on its pool's board: (the board, the index of its pid there)
 _slot: tuple[Any, int] | None = None
-
-
-#: glibc's malloc: arrays below this come from the heap, not from fresh mappings of their own
-MMAP_THRESHOLD = 64 << 20
-#: and the heap keeps this much freed memory before it gives any back
-TRIM_THRESHOLD = 256 << 20
-
-
-def keep_freed_memory() -> None:
-    """Let the worker's allocator reuse freed memory (glibc; elsewhere nothing). Each case
-    allocates and frees the same few megabytes of arrays; by default glibc maps each one afresh
-    and returns it when freed, and the first touch of every page of every array costs a fault:
-    a third of an 8 s case (10,000 cases of the seed deck: 14.8 -> 10.7 ms a case). The
-    worker's memory then stays at its peak, a case's arrays, not growing with the cases."""
-    try:
-        import ctypes
-
-        libc = ctypes.CDLL(None)
-        libc.mallopt(-3, MMAP_THRESHOLD)  # M_MMAP_THRESHOLD
-        libc.mallopt(-1, TRIM_THRESHOLD)  # M_TRIM_THRESHOLD
-    except (OSError, AttributeError):  # pragma: no cover - not glibc
-        pass
 
 
 def init_local_worker(board=None, taken=None) -> None:

@@ -22,6 +22,10 @@ SPATIAL = -2  # a body in space with exact kinematics: q[3:6] its rotation vecto
 #: companion (rbhyst.solve.companion), whose motion must not carry the run's O(h^2) branch origins
 LOCATED = -3
 
+#: the methods whose modified equation the companion's load is written for
+#: (rbhyst.solve.kernels.modified), as that kernel's ``method``
+MODIFIED = {"newmark": 0, "central-difference": 1, "chang": 2}
+
 # element state columns: displacement, force, branch sign, gap, tangent, antiderivative
 U, F, S, G, K, A, UP = range(7)  # UP: the deformation a step before (LOCATED)
 N_STATE = 7

@@ -15,9 +15,9 @@ from __future__ import annotations
 
 from numba import njit
 
-NEWMARK, CENTRAL_DIFFERENCE, CHANG = 0, 1, 2
-#: rbhyst.solve.integrators' names of the methods written out here
-CODES = {"newmark": NEWMARK, "central-difference": CENTRAL_DIFFERENCE, "chang": CHANG}
+from rbhyst.solve.kernels.layout import MODIFIED
+
+NEWMARK, CENTRAL_DIFFERENCE, CHANG = MODIFIED["newmark"], MODIFIED["central-difference"], MODIFIED["chang"]
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
