@@ -156,7 +156,7 @@ class Result:
             "rbhyst_version": __version__,
             "title": system.title,
             "body": body_summary(system.body),
-            "elements": self._elements_summary(),
+            "elements": self.elements_summary(),
             **({"dampers": [{"x_m": list(dp.x), **_line(dp), "c_N_s_m": dp.c, "count": dp.count}
                             for dp in system.dampers]} if system.dampers else {}),
             **({"rayleigh": system.rayleigh.summary()} if getattr(system, "rayleigh", None) is not None else {}),
@@ -179,13 +179,7 @@ class Result:
                 "wall_s": st.wall_s,
                 **({"rtol": s.rtol, "adaptive": self.solver} if self.solver is not None else {}),
             },
-            "energy": {
-                "balance_error": self.energy_balance,
-                "warn_above": ENERGY_WARN,
-                "input_J": float(self._final("E_input_J")),
-                "hysteretic_J": float(self._final("E_hysteretic_J")),
-                **({"viscous_J": float(self._final("E_viscous_J"))} if "E_viscous_J" in self.columns else {}),
-            },
+            "energy": self.energy_summary(),
             "accuracy": self.accuracy,
             **({"kinematics": self.kinematics} if self.kinematics is not None else {}),
             "peaks": e.peaks(),
@@ -196,7 +190,18 @@ class Result:
             **({"deck": self.deck} if self.deck is not None else {}),
         }
 
-    def _elements_summary(self) -> list[dict]:
+    def energy_summary(self) -> dict:
+        """summary.json's ``energy``: the balance's error and the work of the load, the elements
+        and the dampers at the end."""
+        return {
+            "balance_error": self.energy_balance,
+            "warn_above": ENERGY_WARN,
+            "input_J": float(self._final("E_input_J")),
+            "hysteretic_J": float(self._final("E_hysteretic_J")),
+            **({"viscous_J": float(self._final("E_viscous_J"))} if "E_viscous_J" in self.columns else {}),
+        }
+
+    def elements_summary(self) -> list[dict]:
         """Each [[elements]] entry, then each direction of each [[isolators]] entry: place, set,
         stiffnesses, for an isolator's the isolator (1-based) and the role (axial, shear1,
         shear2; in the plane axial, shear), and where it has a stroke, how much of it the run used
