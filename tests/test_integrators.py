@@ -239,3 +239,18 @@ def test_the_deck_accepts_every_integrator(tmp_path):
         deck = copy.deepcopy(seed_deck(duration=0.05))
         deck["analysis"]["integrator"] = name
         assert parse_deck(deck).analysis.integrator == name
+
+
+@pytest.mark.parametrize("name", ["chang", "central-difference", "newmark", "kr-alpha"])
+def test_coefficients_for_every_substep_level_at_once_are_those_of_each(name):
+    """A plan takes the coefficients of all its substep levels in one call: bit for bit those
+    of each level alone (with damping, a stiff K0, steps from 1 ms to 1 ms / 2^12)."""
+    rng = np.random.default_rng(3)
+    mass = rng.uniform(1.0, 1000.0, 3)
+    k0 = rng.normal(size=(3, 3))
+    k0 = 1e5 * k0 @ k0.T
+    c = 10.0 * rng.normal(size=(3, 3)) ** 2
+    steps = 1e-3 / 2.0 ** np.arange(13)
+    method = integrators.get(name)
+    each = np.stack([method.coefficients(mass, k0, c, h) for h in steps])
+    assert np.array_equal(method.coefficients(mass, k0, c, steps), each)

@@ -244,8 +244,8 @@ class FixedStepPlan(Plan):
             h_c = s.dt / nsub
             level0 = min_level(system, s, method, h_c)
             # levels below level0 are never used (and may be singular for an extreme K0)
-            self.coef[int(nsub)] = np.stack([method.coefficients(mass, k0, self.cm[:system.n], h_c / 2**max(lv, level0))
-                                             for lv in range(s.max_substep_level + 1)])
+            steps = np.array([h_c / 2**max(lv, level0) for lv in range(s.max_substep_level + 1)])
+            self.coef[int(nsub)] = method.coefficients(mass, k0, self.cm[:system.n], steps)  # (one set a level)
             self.level0[int(nsub)] = level0
         self.bvec = np.ascontiguousarray(system.bvec)
         self.params = np.ascontiguousarray(system.params)

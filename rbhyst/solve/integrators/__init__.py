@@ -29,8 +29,8 @@ class Method:
     kernel_id: int | None = None
     #: the step depends on K0 (Chang, Chen-Ricles, KR-alpha): omega_0 h must stay resolved
     structure_dependent: bool = False
-    #: (mass (n,), K0 (n, n), C (n, n), h) -> (N_COEF, n, n)
-    coefficients: Callable[[np.ndarray, np.ndarray, np.ndarray, float], np.ndarray] | None = None
+    #: (mass (n,), K0 (n, n), C (n, n), h) -> (N_COEF, n, n); h an array of steps -> one set each
+    coefficients: Callable[[np.ndarray, np.ndarray, np.ndarray, float | np.ndarray], np.ndarray] | None = None
     #: (system, settings, keep=, csv=) -> Result, for methods outside the fixed-step loop
     solve: Callable | None = None
 

@@ -17,12 +17,14 @@ from rbhyst.solve.integrators.chang import B1, B2, MC_INV
 KERNEL_ID = 1
 
 
-def coefficients(mass: np.ndarray, k0: np.ndarray, c: np.ndarray, h: float) -> np.ndarray:
+def coefficients(mass: np.ndarray, k0: np.ndarray, c: np.ndarray, h) -> np.ndarray:
+    """(N_COEF, n, n) for a step h, or (len(h), N_COEF, n, n) for an array of them."""
+    h = np.asarray(h, dtype=float)[..., None, None]
     eye = np.eye(len(mass))
-    out = np.zeros((N_COEF, len(mass), len(mass)))
-    out[B1] = eye
-    out[B2] = 0.5 * eye
-    out[MC_INV] = np.linalg.inv(np.diag(mass) + 0.5 * h * c)
+    out = np.zeros(h.shape[:-2] + (N_COEF, len(mass), len(mass)))
+    out[..., B1, :, :] = eye
+    out[..., B2, :, :] = 0.5 * eye
+    out[..., MC_INV, :, :] = np.linalg.inv(np.diag(mass) + 0.5 * h * c)
     return out
 
 

@@ -24,14 +24,16 @@ KERNEL_ID = 0
 B1, B2, MC_INV = 0, 1, 2
 
 
-def coefficients(mass: np.ndarray, k0: np.ndarray, c: np.ndarray, h: float) -> np.ndarray:
+def coefficients(mass: np.ndarray, k0: np.ndarray, c: np.ndarray, h) -> np.ndarray:
+    """(N_COEF, n, n) for a step h, or (len(h), N_COEF, n, n) for an array of them."""
+    h = np.asarray(h, dtype=float)[..., None, None]
     m = np.diag(mass)
     mc = m + 0.5 * h * c
     d = mc + 0.25 * h * h * k0
-    out = np.zeros((N_COEF, len(mass), len(mass)))
-    out[B1] = np.linalg.solve(d, mc)
-    out[B2] = 0.5 * np.linalg.solve(d, m)
-    out[MC_INV] = np.linalg.inv(mc)
+    out = np.zeros(h.shape[:-2] + (N_COEF, len(mass), len(mass)))
+    out[..., B1, :, :] = np.linalg.solve(d, mc)
+    out[..., B2, :, :] = 0.5 * np.linalg.solve(d, np.broadcast_to(m, d.shape))
+    out[..., MC_INV, :, :] = np.linalg.inv(mc)
     return out
 
 

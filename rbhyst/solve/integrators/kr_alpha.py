@@ -69,6 +69,7 @@ def coefficients(mass: np.ndarray, k0: np.ndarray, c: np.ndarray, h: float, rho_
     A3 from A = M + gamma h C + beta h^2 K0 as published, A1 = (M + beta h^2 K0)^-1 M.
     """
     am, af, gamma, beta = parameters(rho_inf)
+    h = np.asarray(h, dtype=float)[..., None, None]  # (an array of steps: a set for each)
     m = np.diag(mass)
     eye = np.eye(len(mass))
     big_a = m + gamma * h * c + beta * h * h * k0
@@ -76,18 +77,18 @@ def coefficients(mass: np.ndarray, k0: np.ndarray, c: np.ndarray, h: float, rho_
     # O(h^2) puts an O(h^2) error into every step's velocity on the velocity at t, and a damped
     # run was first order (0.55 % at 1 ms where chang has 0.008 %); without it A1 - I = O(h^2)
     # and the spectral radius over omega h and damping ratios 0-5 is unchanged
-    a1 = np.linalg.solve(m + beta * h * h * k0, m)
+    a1 = np.linalg.solve(m + beta * h * h * k0, np.broadcast_to(m, big_a.shape))
     a2 = (0.5 + gamma) * a1
     a3 = np.linalg.solve(big_a, am * m + af * gamma * h * c + af * beta * h * h * k0)
     mh_inv = np.linalg.inv(m @ (eye - a3) + (1.0 - af) * gamma * h * c)
-    out = np.zeros((N_COEF, len(mass), len(mass)))
-    out[V_A] = a1 - gamma * eye
-    out[D_A] = a2 - gamma * eye
-    out[A_A] = mh_inv @ (m @ a3 + (1.0 - af) * h * c @ (a1 - gamma * eye))
-    out[X_NEW] = (1.0 - af) * mh_inv
-    out[X_OLD] = af * mh_inv
-    out[V_ANEW] = gamma * eye
-    out[A_V] = mh_inv @ c
+    out = np.zeros(h.shape[:-2] + (N_COEF, len(mass), len(mass)))
+    out[..., V_A, :, :] = a1 - gamma * eye
+    out[..., D_A, :, :] = a2 - gamma * eye
+    out[..., A_A, :, :] = mh_inv @ (m @ a3 + (1.0 - af) * h * c @ (a1 - gamma * eye))
+    out[..., X_NEW, :, :] = (1.0 - af) * mh_inv
+    out[..., X_OLD, :, :] = af * mh_inv
+    out[..., V_ANEW, :, :] = gamma * eye
+    out[..., A_V, :, :] = mh_inv @ c
     return out
 
 

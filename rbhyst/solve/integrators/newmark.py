@@ -29,9 +29,10 @@ KERNEL_ID = 2
 ROUNDOFF2 = (8.0 * 2.220446049250313e-16) ** 2
 
 
-def coefficients(mass: np.ndarray, k0: np.ndarray, c: np.ndarray, h: float) -> np.ndarray:
-    """Unused by the step (it needs only M, C and h): zeros of the loop's shape."""
-    return np.zeros((N_COEF, len(mass), len(mass)))
+def coefficients(mass: np.ndarray, k0: np.ndarray, c: np.ndarray, h) -> np.ndarray:
+    """Unused by the step (it needs only M, C and h): zeros of the loop's shape (one set for a
+    step h, one per step for an array of them)."""
+    return np.zeros(np.shape(h) + (N_COEF, len(mass), len(mass)))
 
 
 METHOD = Method(
