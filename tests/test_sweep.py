@@ -952,3 +952,12 @@ def test_ending_the_workers_mid_message_does_not_hang_the_sweep():
     closing.start()
     closing.join(30.0)
     assert not closing.is_alive(), "closing the pool hung on the half-sent result"
+
+
+def test_stats_numbers_are_each_value_s_own_repr():
+    """stats.csv formats a group's mean, median, p84 and max once where they are equal, and
+    never writes -0.0 as 0.0 (nor 0.0 as -0.0)."""
+    from rbhyst.analyses.sweep.tables import _nums
+
+    assert _nums([1.5, 1.5, 0.1 + 0.2, None]) == ["1.5", "1.5", "0.30000000000000004", ""]
+    assert _nums([-0.0, 0.0, 0.0, -0.0]) == ["-0.0", "0.0", "0.0", "-0.0"]
