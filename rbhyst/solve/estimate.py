@@ -275,7 +275,7 @@ def estimate(result, settings, companion=None) -> dict:
 
 
 #: the companion's check of a run near or above the warning: the run again with this fraction of
-#: the companion's source added. On the sample decks and the cases of 0.1 it moves by 1e-4 - 6e-3
+#: the companion's source added. On the sample decks and the cases of 0.1 it moves by 7e-4 - 6e-3
 #: of the error where the history is determined (the adaptive solutions converge), by 80 % to
 #: 100 % where it is not (silent-70, -149, -476, -782)
 COMPANION_PROBE = 1e-3
@@ -290,9 +290,9 @@ COMPANION_OMEGA_DT = 1.0
 
 def _from_companion(result, settings, plan, tap) -> dict | None:
     """The estimate from the run's companion (rbhyst.solve.companion), or None where the adaptive
-    solutions must say it: a step whose Newton iterations failed in the companion where the run's
-    converged, an element out of its range, an estimate past COMPANION_LARGEST, a history the check finds
-    undetermined."""
+    solutions must say it: a step whose Newton iterations failed in the companion where the
+    run's converged, an element out of its range, an estimate past COMPANION_LARGEST, a history
+    the check finds undetermined."""
     from rbhyst.solve.companion import Companion
 
     stats = result.stats

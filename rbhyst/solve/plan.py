@@ -301,7 +301,7 @@ class FixedStepPlan(Plan):
         """n rows of the loop: compute steps of h_c with the coefficients of ``nsub`` substeps a
         step of dt, a row after every ``rows_every``-th of them (``rot``: the kinematics' code,
         if not the system's: kernels.layout.LOCATED). ``levels`` (compute steps,): receives each
-        step's substep level; with ``force`` each starts from the level it holds."""
+        step's substep level; with ``force`` each step takes the level it holds."""
         from rbhyst.solve.kernels.compiled import kernel
 
         s = self.settings
@@ -325,19 +325,15 @@ class FixedStepPlan(Plan):
                                         np.zeros((ne, n_q)), np.zeros((N_W, n_q)), np.zeros((n_q, n_q)), buf.d, buf.v, buf.u, buf.f, buf.e,
                                         levels, force, self.info)
 
-    def compute_nodes(self, levels: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def compute_nodes(self, levels: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(t, h, out): every compute node's time from 0, the step the loop takes after it
-        (dt / substeps / 2^level: level0, or each compute step's ``levels`` as a run took them;
-        the last node's the one before it), and the node of every output step."""
+        (dt / substeps / 2^level, each compute step's ``levels`` as a run took them; the last
+        node's the one before it), and the node of every output step."""
         s = self.settings
         t = np.concatenate([[0.0], compute_times(self.bounds, self.substeps, s.dt)])
         lengths = np.diff(self.bounds)
         out = np.concatenate([[0], np.cumsum(np.repeat(self.substeps, lengths))])
-        if levels is None:
-            step = np.array([s.dt / m / 2.0 ** self.level0[int(m)] for m in self.substeps])
-            h = np.repeat(step, lengths * self.substeps)
-        else:
-            h = np.repeat(s.dt / self.substeps, lengths * self.substeps) / 2.0 ** levels
+        h = np.repeat(s.dt / self.substeps, lengths * self.substeps) / 2.0 ** levels
         return t, np.append(h, h[-1:]), out
 
     def segments(self, fine: bool = False):
