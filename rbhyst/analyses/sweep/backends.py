@@ -342,8 +342,11 @@ class DaskCluster:
             killed = getattr(err, "allowed_failures", None) if type(err).__name__ == "KilledWorker" else None
             if killed is not None:
                 raise WorkerLost(f"KilledWorker: the batch killed {killed + 1} workers", killed=killed + 1) from None
-            if getattr(err, "reason", None) == "scheduler-connection-lost":
+            if getattr(err, "reason", None) == "scheduler-connection-lost" or self.client.status != "running":
                 raise WorkerLost("the connection to the scheduler was lost", again=True) from None
+            if type(err).__name__ == "CommClosedError":  # (distributed.comm): the result's connection
+                # reset as the scheduler or a worker went, between the wait and the gather
+                raise WorkerLost(f"a connection of the cluster was lost ({_plain(err)})", again=True) from None
             raise WorkerLost(_plain(err)) from None
 
     def recover(self, err: WorkerLost, f, batch, inflight: dict, alone: bool) -> Recovery:
