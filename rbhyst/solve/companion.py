@@ -211,13 +211,9 @@ def source_and_offset(method: str, a: np.ndarray, v: np.ndarray, t: np.ndarray, 
     module docstring's S), none at the nodes ``near``, and how far the method's velocity is from
     the derivative of the smooth curve its nodes lie on (the same expansion), from its
     accelerations a and velocities v at the nodes t, h the step the loop takes after each
-    (rbhyst.solve.kernels.modified, one compiled pass):
-
-        newmark  h^2 A'/12,   central difference  -h^2 A'/6,
-        chang    -h^2 [A'/6 + M^-1 (C A + K0 V)/4].
-
-    The run starts at rest with V = 0, so its curve starts with q' = the offset: the companion
-    starts with the opposite velocity, and its velocities are read as V + the offset."""
+    (rbhyst.solve.kernels.modified writes both out, one compiled pass). The run starts at rest
+    with V = 0, so its curve starts with q' = the offset: the companion starts with the opposite
+    velocity, and its velocities are read as V + the offset."""
     from rbhyst.solve.kernels.compiled import kernel
 
     n = a.shape[1]

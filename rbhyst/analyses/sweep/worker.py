@@ -33,7 +33,6 @@ def init_local_worker(board=None, taken=None) -> None:
     ``taken`` (how many slots of it are taken) let the pool know which batch a worker that
     died was running."""
     global _slot
-    keep_freed_memory()
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     try:  # Linux: SIGTERM when the parent dies, so that no worker outlives a killed sweep
         import ctypes
@@ -64,7 +63,7 @@ def run_tracked(batch: int, run, *args):
 
 def run_batch(base, cases: list[tuple[str, dict]], histories: bool = False) -> list[dict]:
     """Run ``cases`` ((key, deck values) each) on ``base`` (a cases.BaseDeck); one dict per case."""
-    keep_freed_memory()  # (a Dask worker's process: set for each batch, it costs two calls)
+    keep_freed_memory()  # (every batch: a Dask worker's process is not started by the sweep; two calls)
     deck = _bases.get(base.token)
     if deck is None:
         deck = _bases[base.token] = base.deck()
@@ -95,7 +94,7 @@ def run_case(base, key: str, values: dict, histories: bool = False) -> dict:
         peaks=_finite(result.extremes.peaks()),
         energy=_finite({k: v for k, v in result.energy_summary().items() if k != "warn_above"}),
         accuracy=_finite(without_timings(flat_numbers(accuracy))) if accuracy else {},
-        stroke=_finite(stroke_utilizations({"elements": result.elements_summary()})),
+        stroke=_finite(stroke_utilizations(result.elements_summary())),
         # a case's computing: its time stepping and its error estimate
         wall_s=result.wall_s + ((accuracy or {}).get("wall_s") or 0.0),
         elapsed_s=time.perf_counter() - tic,
@@ -105,11 +104,11 @@ def run_case(base, key: str, values: dict, histories: bool = False) -> dict:
     return out
 
 
-def stroke_utilizations(summary: dict) -> dict[str, float]:
+def stroke_utilizations(elements: list[dict]) -> dict[str, float]:
     """{"e3": 0.8, ...}: each [[elements]] entry with a stroke, named by its first element's
     number in the CSV (its count deform alike), and the share of the stroke it used."""
     out, k = {}, 1
-    for e in summary.get("elements", []):
+    for e in elements:
         if "stroke" in e:
             out[f"e{k}"] = e["stroke"]["utilization"]
         k += e["count"]

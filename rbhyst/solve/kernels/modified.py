@@ -73,7 +73,7 @@ def source_and_offset(method, a, v, t, h, mass, c, damped, k0, near, extra, offs
                     for k in range(n):
                         cd += c[j, k] * d1[k]
                 extra[i, j] = sign * hh * (fm * d2[j] * mass[j] + fc * cd)
-                offset[i, j] = -sign * hh * d1[j] * (1.0 / 12.0 if method == NEWMARK else 1.0 / 6.0)
+                offset[i, j] = -sign * fc * hh * d1[j]
         if near[i]:
             for j in range(n):
                 extra[i, j] = 0.0
