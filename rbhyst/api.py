@@ -12,7 +12,6 @@ files, in :func:`run`.
 
 from __future__ import annotations
 
-import functools
 from pathlib import Path
 
 from rbhyst.errors import InputError
@@ -60,13 +59,16 @@ def run(deck: Deck | str | Path, integrator: str | None = None, dt: float | None
         monitor.note(note)
     draw = d.output.plots if plots is None else plots
     with staged_directory(Path(out)) as tmp:
-        result = analyse(system, settings, keep=False, csv=functools.partial(CsvWriter, tmp / "time_history.csv"),
-                         planned=planned, progress=progress)
-        result.notes = early + result.notes
-        result.deck = as_run
-        if progress is not None and draw:
-            progress(0, 0, "drawing the figures")
-        _write_rest(result, tmp, draw)
+        csv = CsvWriter(tmp / "time_history.csv")
+        try:
+            result = analyse(system, settings, keep=False, csv=csv, planned=planned, progress=progress)
+            result.notes = early + result.notes
+            result.deck = as_run
+            if progress is not None and draw:
+                progress(0, 0, "drawing the figures")
+            _write_rest(result, tmp, draw)  # (while the last rows are written)
+        finally:
+            csv.wait()
     result.csv_path = Path(out) / "time_history.csv"
     result.writer = write
     return result

@@ -2,7 +2,11 @@
 
 from __future__ import annotations
 
+import errno
+from pathlib import Path
+
 import numpy as np
+import pytest
 
 from rbhyst.results.csvtext import format_rows
 
@@ -29,3 +33,47 @@ def test_every_length_of_digits_at_every_place_of_the_point():
     table = np.array(vals).reshape(-1, 10)
     expected = "".join(",".join("%.10g" % x for x in row) + "\n" for row in table)
     assert format_rows(table).decode() == expected
+
+
+def test_a_file_streamed_chunk_by_chunk_is_the_table_s_text(tmp_path):
+    """CsvWriter formats a chunk while the one before is written by its thread: chunks of any
+    size and stride, in order, whatever the two text buffers' turns; called again, the file
+    starts over (tolerance mode's ladder runs again into the same file)."""
+    from rbhyst.results.writers import CsvWriter
+
+    rng = np.random.default_rng(3)
+    table = rng.standard_normal((9000, 5)) * 10.0 ** rng.integers(-8, 8, (9000, 5))
+    path = tmp_path / "t.csv"
+    w = CsvWriter(path)
+    w(("a", "b"))  # a first run that is started over
+    w.add(table[:10, :2])
+    w.close()
+    w(("a", "b", "c", "d", "e"))
+    cuts = [0, 1, 2, 700, 7001, 7002, 9000]
+    for lo, hi in zip(cuts, cuts[1:]):
+        w.add(table[lo:hi])
+    w.add(table[::1000])  # a strided chunk, as output.every takes
+    w.close()
+    w.wait()
+    expected = "a,b,c,d,e\n" + format_rows(table).decode() + format_rows(table[::1000]).decode()
+    assert path.read_text() == expected
+
+
+@pytest.mark.skipif(not Path("/dev/full").exists(), reason="needs /dev/full")
+def test_a_write_that_fails_in_the_writer_s_thread_is_raised_to_the_caller():
+    """/dev/full fails every write with ENOSPC: the error reaches the caller (the next add or
+    wait), never lost in the thread, and the file is closed all the same."""
+    from rbhyst.results.writers import CsvWriter
+
+    w = CsvWriter(Path("/dev/full"))(("a",))
+    w.add(np.ones((50_000, 1)))  # (its write, in the thread, is the first that fails: the header is buffered)
+    with pytest.raises(OSError) as caught:  # by the second add at the latest, which reuses the first's text buffer
+        w.add(np.ones((10, 1)))
+        w.add(np.ones((10, 1)))
+        w.close()
+        w.wait()
+    assert caught.value.errno == errno.ENOSPC
+    w.close()
+    with pytest.raises(OSError):
+        w.wait()
+    assert w._last is not None and not w._last.is_alive()

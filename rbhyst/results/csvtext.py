@@ -18,16 +18,22 @@ MAX_WIDTH = 17  # "-1.234567891e-308"
 POW10 = np.array([float(f"1e{k}") for k in range(-300, 301)])
 
 
+#: values formatted per compiled call: the work arrays (16 bytes a value) stay in the cache and
+#: are not faulted in afresh for every chunk's size
+BLOCK_VALUES = 32_768
+
+
 def format_rows(table: np.ndarray) -> bytes:
     """CSV lines of a 2-D float table, each value as "%.10g" would print it."""
     return bytes(RowsText()(table))
 
 
 class RowsText:
-    """format_rows for a stream of chunks of one width: the work arrays and the text buffer are
+    """format_rows for a stream of chunks of one width: the work arrays and the text buffers are
     kept from one chunk to the next (fresh ones cost a page fault every 4 kB, a tenth of the
-    time of the formatting), and the text comes back as a view of the buffer, not a copy: use
-    it before the next call."""
+    time of the formatting), and the text comes back as a view of the buffer ``slot`` (one of
+    two, so that one chunk's text can be written while the next is formatted), not a copy: use
+    it before the next call with that slot."""
 
     def __init__(self):
         self._work: dict[str, np.ndarray] = {}
@@ -38,20 +44,26 @@ class RowsText:
             a = self._work[name] = np.empty(size, dtype)
         return a[:size]
 
-    def __call__(self, table: np.ndarray) -> memoryview:
-        table = np.ascontiguousarray(table, dtype=float)
+    def __call__(self, table: np.ndarray, slot: int = 0) -> memoryview:
+        rows, cols = table.shape
         if table.size == 0:
-            return memoryview(b"\n" * table.shape[0])
-        mant = self._array("mant", table.size, np.int64).reshape(table.shape)
-        expo = self._array("expo", table.size, np.int64).reshape(table.shape)
-        flag = self._array("flag", table.size, np.int8).reshape(table.shape)
-        if kernel("decompose")(table, mant, expo, flag, POW10):
-            for i, j in zip(*np.nonzero(flag == 1)):
-                # exact decimal digits of a near-tie: "%.9e" rounds to the same 10 digits as "%.10g"
-                digits, exponent = ("%.9e" % abs(table[i, j])).split("e")
-                mant[i, j] = int(digits.replace(".", ""))
-                expo[i, j] = int(exponent)
-                flag[i, j] = 0
-        buf = self._array("buf", table.shape[0] * (table.shape[1] * (MAX_WIDTH + 1) + 1), np.uint8)
-        n = kernel("render")(table, mant, expo, flag, buf, self._array("digits", DIGITS, np.int64))
-        return memoryview(buf)[:n]
+            return memoryview(b"\n" * rows)
+        buf = self._array(f"text{slot}", rows * (cols * (MAX_WIDTH + 1) + 1), np.uint8)
+        digits = self._array("digits", DIGITS, np.int64)
+        step = max(1, BLOCK_VALUES // cols)
+        pos = 0
+        for first in range(0, rows, step):
+            part = np.ascontiguousarray(table[first:first + step], dtype=float)
+            size = part.size
+            mant = self._array("mant", size, np.int64).reshape(part.shape)
+            expo = self._array("expo", size, np.int64).reshape(part.shape)
+            flag = self._array("flag", size, np.int8).reshape(part.shape)
+            if kernel("decompose")(part, mant, expo, flag, POW10):
+                for i, j in zip(*np.nonzero(flag == 1)):
+                    # exact decimal digits of a near-tie: "%.9e" rounds to the same 10 digits as "%.10g"
+                    digits_text, exponent = ("%.9e" % abs(part[i, j])).split("e")
+                    mant[i, j] = int(digits_text.replace(".", ""))
+                    expo[i, j] = int(exponent)
+                    flag[i, j] = 0
+            pos += kernel("render")(part, mant, expo, flag, buf[pos:], digits)
+        return memoryview(buf)[:pos]
