@@ -29,14 +29,15 @@ def format_rows(table: np.ndarray) -> bytes:
 
 
 class RowsText:
-    """format_rows for a stream of chunks of one width: the work arrays and the text buffers are
+    """format_rows for a stream of chunks of one width: the work arrays and the text buffer are
     kept from one chunk to the next (fresh ones cost a page fault every 4 kB, a tenth of the
-    time of the formatting), and the text comes back as a view of the buffer ``slot`` (one of
-    two, so that one chunk's text can be written while the next is formatted), not a copy: use
-    it before the next call with that slot."""
+    time of the formatting), and the text comes back as a view of the buffer, not a copy: use
+    it before the next call. The compiled kernels are looked up when it is made, so that a
+    thread can format with it; they let go of Python's lock while they run."""
 
     def __init__(self):
         self._work: dict[str, np.ndarray] = {}
+        self._decompose, self._render = kernel("decompose"), kernel("render")
 
     def _array(self, name: str, size: int, dtype) -> np.ndarray:
         a = self._work.get(name)
@@ -44,11 +45,11 @@ class RowsText:
             a = self._work[name] = np.empty(size, dtype)
         return a[:size]
 
-    def __call__(self, table: np.ndarray, slot: int = 0) -> memoryview:
+    def __call__(self, table: np.ndarray) -> memoryview:
         rows, cols = table.shape
         if table.size == 0:
             return memoryview(b"\n" * rows)
-        buf = self._array(f"text{slot}", rows * (cols * (MAX_WIDTH + 1) + 1), np.uint8)
+        buf = self._array("text", rows * (cols * (MAX_WIDTH + 1) + 1), np.uint8)
         digits = self._array("digits", DIGITS, np.int64)
         step = max(1, BLOCK_VALUES // cols)
         pos = 0
@@ -58,12 +59,12 @@ class RowsText:
             mant = self._array("mant", size, np.int64).reshape(part.shape)
             expo = self._array("expo", size, np.int64).reshape(part.shape)
             flag = self._array("flag", size, np.int8).reshape(part.shape)
-            if kernel("decompose")(part, mant, expo, flag, POW10):
+            if self._decompose(part, mant, expo, flag, POW10):
                 for i, j in zip(*np.nonzero(flag == 1)):
                     # exact decimal digits of a near-tie: "%.9e" rounds to the same 10 digits as "%.10g"
                     digits_text, exponent = ("%.9e" % abs(part[i, j])).split("e")
                     mant[i, j] = int(digits_text.replace(".", ""))
                     expo[i, j] = int(exponent)
                     flag[i, j] = 0
-            pos += kernel("render")(part, mant, expo, flag, buf[pos:], digits)
+            pos += self._render(part, mant, expo, flag, buf[pos:], digits)
         return memoryview(buf)[:pos]

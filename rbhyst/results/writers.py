@@ -3,6 +3,7 @@ one chunk of rows in memory), summary.json, spectra.csv."""
 
 from __future__ import annotations
 
+import collections
 import json
 import threading
 from pathlib import Path
@@ -21,41 +22,42 @@ class CsvWriter:
 
     ``CsvWriter(path)`` is what a run is given; the run calls it with its columns to start the
     file (a run that is repeated, as tolerance mode's ladder does, starts it over), then
-    ``add(rows)`` for every chunk and ``close()``. Each chunk's text is written by a thread of its
-    own while the caller goes on with the next chunk, the error estimate and the figures: most
-    of a write is the system finding fresh pages for the file, which holds no lock of Python's
-    (the seed deck's 21 MB take 40-150 ms of it, as long as all the rest of the run). Two text
-    buffers take turns, so that one chunk is formatted while the one before is written.
-    ``close()`` leaves the file to close after its last write; ``wait()`` returns once it has,
-    and raises what a write raised. Whoever gave the run a CsvWriter waits for it before the
-    folder is put in place or removed.
+    ``add(rows)`` for every chunk and ``close()``. A chunk is formatted and written by a thread
+    of its own while the caller goes on with the next chunk, the error estimate and the
+    figures: the compiled formatting and the write (most of it the system finding fresh pages
+    for the file) hold no lock of Python's. The seed deck's 21 MB take 60 ms to format and
+    40-150 ms to write here, as long as all the rest of the run. At most IN_FLIGHT chunks wait
+    their turn (a run faster than its disk waits for it: memory stays bounded); a chunk must
+    not change once added (a run's tables are new for every chunk). ``close()`` leaves the file
+    to close after its last write; ``wait()`` returns once it has, and raises what a write
+    raised. Whoever gave the run a CsvWriter waits for it before the folder is put in place or
+    removed.
     """
+
+    #: chunks handed to the thread and not yet written
+    IN_FLIGHT = 2
 
     def __init__(self, path: Path):
         self.path = Path(path)
-        self._text = None
         self._fh = None
-        self._last: threading.Thread | None = None
+        self._last: threading.Thread | None = None  # the last chunk's (it ends after every earlier one)
+        self._waiting: collections.deque[threading.Thread] = collections.deque()
         self._error: BaseException | None = None
 
     def __call__(self, columns: tuple[str, ...]) -> "CsvWriter":
         from rbhyst.results.csvtext import RowsText
 
         self.wait()
-        if self._text is None:
-            self._text = RowsText()
-        self._writing: list[threading.Thread | None] = [None, None]  # the write that reads each text
-        self._chunks = 0
+        self._text = RowsText()
         self._fh = open(self.path, "wb")
         self._fh.write((",".join(columns) + "\n").encode())
         return self
 
     def add(self, rows: np.ndarray) -> None:
-        i = self._chunks % 2
-        self._chunks += 1
-        self._join(self._writing[i])  # (its text buffer is free again)
-        text = self._text(rows, slot=i)  # (a view of that buffer)
-        self._writing[i] = self._after_last(self._fh.write, text)
+        while len(self._waiting) >= self.IN_FLIGHT:
+            self._join(self._waiting.popleft())
+        self._join(None)  # (a write that failed: said now)
+        self._waiting.append(self._after_last(self._write, self._fh, self._text, rows))
 
     def close(self) -> None:
         """The file closes after its last write, whether or not a write failed; wait() for it."""
@@ -64,8 +66,16 @@ class CsvWriter:
             self._fh = None
 
     def wait(self) -> None:
-        """Return once every write queued so far has ended; raise what one of them raised."""
+        """Return once every chunk added so far is written; raise what a write raised."""
+        self._waiting.clear()
         self._join(self._last)
+
+    @staticmethod
+    def _write(fh, text, rows: np.ndarray) -> None:
+        # one thread formats and writes, chunk after chunk: formatting the next chunk beside
+        # the write of the one before (a second thread, two text buffers) gained nothing on
+        # two cores, where the run's own stepping takes the other
+        fh.write(text(rows))
 
     def _after_last(self, work, *args, always: bool = False) -> threading.Thread:
         before = self._last
@@ -79,7 +89,7 @@ class CsvWriter:
                 except BaseException as exc:  # (raised in the caller's thread by wait() or the next add())
                     self._error = self._error or exc
 
-        self._last = threading.Thread(target=step, name="time_history.csv", daemon=True)
+        self._last = threading.Thread(target=step, name=f"{self.path.name} writer", daemon=True)
         self._last.start()
         return self._last
 

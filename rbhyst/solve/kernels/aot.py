@@ -78,6 +78,7 @@ def compiler():
 
     from numba.pycc import CC
 
+    _release_the_gil()
     cc = CC("_aot", source_module="rbhyst.solve.kernels.aot")
     cc.use_nrt = False  # as the JIT kernels: no reference counting, every buffer from the caller
     cc.verbose = False
@@ -88,3 +89,20 @@ def compiler():
     stamp = source_stamp()
     cc.export("stamp", "i8()")(eval(f"lambda: {stamp}"))  # the sources it was built from
     return cc
+
+
+def _release_the_gil() -> None:
+    """Every export lets go of Python's lock while it runs, as ``nogil=True`` makes a JIT kernel:
+    a thread formats time_history.csv while the run steps (rbhyst.results.writers). numba's
+    ahead-of-time compiler has no option for it; it takes the flags of its compilation from
+    this name, so that a subclass setting release_gil there is the whole change."""
+    import numba.pycc.compiler as pycc
+    from numba.core.compiler import Flags
+
+    class ReleasingGil(Flags):
+        def __init__(self, *args, **kwargs):
+            super().__init__(*args, **kwargs)
+            self.release_gil = True
+
+    if pycc.Flags.__name__ != "ReleasingGil":
+        pycc.Flags = ReleasingGil

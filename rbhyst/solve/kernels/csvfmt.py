@@ -1,4 +1,7 @@
-"""The compiled halves of rbhyst.results.csvtext.format_rows: round to DIGITS significant digits, render."""
+"""The compiled halves of rbhyst.results.csvtext.format_rows: round to DIGITS significant digits, render.
+
+They let go of Python's lock (nogil; built ahead of time, every kernel does): time_history.csv
+is formatted by a thread while the run goes on (rbhyst.results.writers.CsvWriter)."""
 
 from __future__ import annotations
 
@@ -10,7 +13,7 @@ from numba import njit
 from rbhyst.solve.kernels.layout import DIGITS, TIE_MARGIN
 
 
-@njit(cache=True, error_model="numpy", _nrt=False)
+@njit(cache=True, error_model="numpy", _nrt=False, nogil=True)
 def _decompose(table, mant, expo, flag, p10):
     """Round every value to DIGITS significant digits: |x| = mant * 10^(expo - DIGITS + 1).
 
@@ -61,7 +64,7 @@ def _decompose(table, mant, expo, flag, p10):
     return n_flag
 
 
-@njit(cache=True, error_model="numpy", _nrt=False)
+@njit(cache=True, error_model="numpy", _nrt=False, nogil=True)
 def _put_int(buf, pos, value, width):
     """Write a non-negative integer with exactly ``width`` digits."""
     for k in range(width - 1, -1, -1):
@@ -70,7 +73,7 @@ def _put_int(buf, pos, value, width):
     return pos + width
 
 
-@njit(cache=True, error_model="numpy", _nrt=False)
+@njit(cache=True, error_model="numpy", _nrt=False, nogil=True)
 def _render(table, mant, expo, flag, buf, digits):
     """Write the rows as CSV text (comma separated, newline terminated) into buf; returns bytes.
     digits: (DIGITS,) int64 work space.
