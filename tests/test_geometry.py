@@ -1,6 +1,7 @@
 import numpy as np
 import pytest
 
+from rbhyst.model import geometry
 from rbhyst.model.geometry import PolygonError, polygon
 from conftest import SEED_MASS, SEED_VERTICES
 
@@ -52,3 +53,25 @@ def test_inertia_is_invariant_under_translation_and_rotation():
 def test_degenerate_polygons_are_errors(verts, words):
     with pytest.raises(PolygonError, match=words):
         polygon(verts)
+
+
+def test_a_polygon_built_again_is_the_same_and_its_own():
+    """polygon() keeps what it built for the next body with the same outline (a sweep's cases):
+    the same numbers to the bit, in arrays that are the caller's to change; a vertex that
+    differs in its last bit, or a -0.0 for a 0.0, is another outline."""
+    verts = [[0.0, 0.0], [1.2, 0.0], [1.2, 0.7], [0.3, 1.1]]
+    first = polygon(verts)
+    first.vertices[0] = 99.0
+    first.centroid[:] = -1.0
+    again = polygon(np.array(verts))
+    assert again.vertices[0, 0] != 99.0 and again.centroid[0] != -1.0
+    fresh = geometry._polygon.__wrapped__(4, np.array(verts, dtype=float).tobytes())
+    assert np.array_equal(again.vertices, fresh.vertices) and np.array_equal(again.centroid, fresh.centroid)
+    assert (again.area, again.i_x1, again.i_x2) == (fresh.area, fresh.i_x1, fresh.i_x2)
+    nudged = [list(v) for v in verts]
+    nudged[2][0] = np.nextafter(1.2, 2.0)
+    built = geometry._polygon.cache_info().misses
+    polygon(verts)
+    polygon(nudged)
+    polygon([[-0.0, 0.0]] + verts[1:])
+    assert geometry._polygon.cache_info().misses == built + 2
