@@ -100,23 +100,56 @@ def stats_rows(cases: list[Case], vary_keys: list[str], results: dict[str, dict]
 
 def _stats_rows(groups: list[tuple[tuple, list[Case]]], entries: dict, peaks: list[str]) -> list[list]:
     rows = []
-    by_count: dict[int, tuple[list[int], list[list[float]]]] = {}  # count -> rows, their values
-    for (level, vary), members in groups:
-        statuses = [case_status(c, entries[c.key])[0] for c in members]
-        failed = statuses.count("failed")
-        values = [result_values(entries[c.key], peaks) for c, s in zip(members, statuses) if s == "ok"]
-        head = [_num(level), *vary]
-        for p in peaks:
-            x = [v[p] for v in values if v[p] is not None]
-            at, xs = by_count.setdefault(len(x), ([], []))
-            at.append(len(rows))
-            xs.append(x)
-            rows.append([*head, p, len(x), failed])
+    # every member's peaks in one matrix (have: the case finished and has that peak)
+    names = [p[len(_PREFIX["peaks"]):] for p in peaks]
+    members = [c for _, ms in groups for c in ms]
+    values = np.zeros((len(members), len(peaks)))
+    have = np.zeros((len(members), len(peaks)), dtype=bool)
+    failed_of, first = [], 0
+    for _, ms in groups:
+        failed = 0
+        for c in ms:
+            status = case_status(c, entries[c.key])[0]
+            failed += status == "failed"
+            if status == "ok":
+                got = entries[c.key].get("peaks") or {}
+                for j, name in enumerate(names):
+                    v = got.get(name)
+                    if v is not None:
+                        values[first, j], have[first, j] = v, True
+            first += 1
+        failed_of.append(failed)
     # every (group, peak) with as many values at once, a row of a matrix each: the same numbers
     # as one call per group (numpy reduces each row as it would the row alone), without a numpy
-    # call per group and peak, which cost seconds at 10,000 groups
-    for n, (at, xs) in by_count.items():
-        s = peak_stats(np.array(xs, dtype=float).reshape(len(xs), n))
+    # call per group and peak, which cost seconds at 10,000 groups. A group whose members all
+    # have every peak goes whole into its size's matrix (a sweep of a continuous value: every
+    # group is one case); the (group, peak) pairs of the others one by one
+    by_count: dict[int, tuple[list[int], list[np.ndarray]]] = {}  # count -> rows, their values
+    whole: dict[int, tuple[list[int], list[np.ndarray]]] = {}  # size -> first rows, (size, peaks) values
+    first = 0
+    for ((level, vary), ms), failed in zip(groups, failed_of):
+        span = slice(first, first + len(ms))
+        first += len(ms)
+        head = [_num(level), *vary]
+        at = len(rows)
+        if have[span].all():
+            starts, blocks = whole.setdefault(len(ms), ([], []))
+            starts.append(at)
+            blocks.append(values[span])
+            rows.extend([*head, p, len(ms), failed] for p in peaks)
+            continue
+        for j, p in enumerate(peaks):
+            x = values[span, j][have[span, j]]
+            rows_n, xs = by_count.setdefault(len(x), ([], []))
+            rows_n.append(len(rows))
+            xs.append(x)
+            rows.append([*head, p, len(x), failed])
+    batches = [([s + j for s in starts for j in range(len(peaks))],  # (group, peak) in order, peaks within
+                np.stack(blocks).transpose(0, 2, 1).reshape(len(starts) * len(peaks), n))
+               for n, (starts, blocks) in whole.items()]
+    batches += [(at, np.array(xs, dtype=float).reshape(len(xs), n)) for n, (at, xs) in by_count.items()]
+    for at, x in batches:
+        s = peak_stats(x)
         for i, *stats in zip(at, s["mean"], s["median"], s["p84"], s["max"]):
             rows[i].extend(_nums(stats))
     return rows
