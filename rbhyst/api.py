@@ -66,7 +66,9 @@ def run(deck: Deck | str | Path, integrator: str | None = None, dt: float | None
             result.deck = as_run
             if progress is not None and draw:
                 progress(0, 0, "drawing the figures")
-            _write_rest(result, tmp, draw)  # (while the last rows are written)
+            # (while the last rows are written; the figures wait for them: a process with a thread
+            # does not fork, and they are drawn on two cores by forking, rbhyst.report.parallel)
+            _write_rest(result, tmp, draw, before_drawing=csv.wait)
         finally:
             csv.wait()
     result.csv_path = Path(out) / "time_history.csv"
@@ -111,13 +113,15 @@ def write(result: Result, out: str | Path, plots: bool = True) -> Path:
     return Path(out)
 
 
-def _write_rest(result: Result, folder: Path, plots: bool) -> None:
+def _write_rest(result: Result, folder: Path, plots: bool, before_drawing=None) -> None:
     from rbhyst.results.writers import write_spectra_csv, write_summary
 
     write_summary(result, folder / "summary.json")
     if result.spectra is not None:
         write_spectra_csv(result.spectra, folder / "spectra.csv")
     if plots:
-        from rbhyst.report.run import write_plots
+        from rbhyst.report.run import write_plots  # (matplotlib's import)
 
+        if before_drawing is not None:
+            before_drawing()
         write_plots(result, folder)

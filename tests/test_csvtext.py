@@ -110,3 +110,29 @@ def test_the_compiled_formatter_lets_other_threads_run():
     t0, t1 = span
     seen = [t0] + [s for s in stamps if t0 < s < t1] + [t1]
     assert np.max(np.diff(seen)) < 0.5 * (t1 - t0), (t1 - t0, np.max(np.diff(seen)))
+
+
+def test_the_figures_wait_for_the_csv_and_are_drawn_on_two_cores(tmp_path, monkeypatch):
+    """A run's figures are drawn once time_history.csv's thread has ended, so that the process
+    may still fork to draw them on two cores (it does not fork with a thread running): a disk
+    slower than matplotlib's import must not make them serial."""
+    import rbhyst
+    import rbhyst.report.parallel as parallel
+    from rbhyst.results.writers import CsvWriter
+    from conftest import seed_deck, write_deck
+
+    write = CsvWriter._write
+
+    def slow(fh, text, rows):
+        time.sleep(0.3)
+        write(fh, text, rows)
+
+    seen = []
+    fork_is_safe = parallel._fork_is_safe
+    monkeypatch.setattr(CsvWriter, "_write", staticmethod(slow))
+    monkeypatch.setattr(parallel, "_fork_is_safe", lambda: seen.append(threading.active_count()) or fork_is_safe())
+    deck = write_deck(tmp_path, seed_deck(duration=2.0))
+    rbhyst.run(deck, out=tmp_path / "out", plots=True)
+    assert seen and seen[0] == 1
+    text = (tmp_path / "out" / "time_history.csv").read_text().splitlines()
+    assert len(text) == 2002
