@@ -38,9 +38,10 @@ def test_every_length_of_digits_at_every_place_of_the_point():
 
 
 def test_a_file_streamed_chunk_by_chunk_is_the_table_s_text(tmp_path):
-    """CsvWriter formats and writes the chunks in a thread while the caller goes on: chunks of
-    any size and stride, in order, however many wait; called again, the file starts over
-    (tolerance mode's ladder runs again into the same file)."""
+    """CsvWriter formats and writes the chunks in threads while the caller goes on (two chunks
+    formatted at once, written in turn): chunks of any size and stride, in order, however
+    many wait; called again, the file starts over (tolerance mode's ladder runs again into the
+    same file)."""
     from rbhyst.results.writers import CsvWriter
 
     rng = np.random.default_rng(3)
@@ -118,18 +119,18 @@ def test_the_figures_wait_for_the_csv_and_are_drawn_on_two_cores(tmp_path, monke
     slower than matplotlib's import must not make them serial."""
     import rbhyst
     import rbhyst.report.parallel as parallel
-    from rbhyst.results.writers import CsvWriter
+    from rbhyst.results.csvtext import RowsText
     from conftest import seed_deck, write_deck
 
-    write = CsvWriter._write
+    text = RowsText.__call__
 
-    def slow(fh, text, rows):
+    def slow(self, table):
         time.sleep(0.3)
-        write(fh, text, rows)
+        return text(self, table)
 
     seen = []
     fork_is_safe = parallel._fork_is_safe
-    monkeypatch.setattr(CsvWriter, "_write", staticmethod(slow))
+    monkeypatch.setattr(RowsText, "__call__", slow)
     monkeypatch.setattr(parallel, "_fork_is_safe", lambda: seen.append(threading.active_count()) or fork_is_safe())
     deck = write_deck(tmp_path, seed_deck(duration=2.0))
     rbhyst.run(deck, out=tmp_path / "out", plots=True)
