@@ -92,7 +92,8 @@ def main() -> None:
         ratios.append(m[0])
         honesty.append(m[4] / m[5] if m[5] > 0 else np.inf)
         print(line(f"random {seed}", m))
-    print(f"  median est/step {np.median(ratios):.1f}x; est/true from {min(honesty):.2f} to {max(honesty):.2f}")
+    if ratios:
+        print(f"  median est/step {np.median(ratios):.1f}x; est/true from {min(honesty):.2f} to {max(honesty):.2f}")
 
     for folder in args.cases:
         print(f"\n{folder}\n" + head)
