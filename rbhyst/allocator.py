@@ -6,7 +6,10 @@ system when it is freed, so that the first touch of every page of every array co
 a third of an 8 s case of the seed deck in a sweep (14.8 -> 10.7 ms), 10 ms of the seed deck's
 error estimate in the command (33 -> 24 ms). Raising the thresholds keeps freed memory in the
 heap for the next array: the process's memory stays at its peak, never growing with the
-cases. Not set in a process that merely imports rbhyst (a notebook keeps its own allocator).
+cases. And one heap for every thread: glibc gives a thread an arena of its own, whose freed
+memory no other thread reuses, so that what the threads formatting time_history.csv freed was
+lost to the error estimate after them (the seed deck's estimate in the command 25 -> 30 ms).
+Not set in a process that merely imports rbhyst (a notebook keeps its own allocator).
 """
 
 from __future__ import annotations
@@ -25,5 +28,6 @@ def keep_freed_memory() -> None:
         libc = ctypes.CDLL(None)
         libc.mallopt(-3, MMAP_THRESHOLD)  # M_MMAP_THRESHOLD
         libc.mallopt(-1, TRIM_THRESHOLD)  # M_TRIM_THRESHOLD
+        libc.mallopt(-8, 1)  # M_ARENA_MAX
     except (OSError, AttributeError):  # pragma: no cover - not glibc
         pass

@@ -93,6 +93,7 @@ class CsvWriter:
         if self._fh is not None:
             self._after_last(self._fh.close, always=True)
             self._fh = None
+            self._texts = None  # (their buffers freed once the last chunk is written, for the next arrays)
 
     def wait(self) -> None:
         """Return once every chunk added so far is written; raise what a write raised."""
