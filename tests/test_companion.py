@@ -179,6 +179,36 @@ def test_the_probe_repeats_the_run_and_moves_a_determined_history_in_proportion(
     assert np.all((1.98 < twice) & (twice < 2.02)), twice
 
 
+def test_the_check_on_a_core_of_its_own_gives_the_same_estimate(monkeypatch):
+    """With a spare core the probe steps on a thread of its own while the companion runs (both
+    step the same plan: each chunk's end reported into its own array): the seed deck, which
+    warns and is checked, gets the same estimate and the same spread to the bit either way; a
+    sweep's worker, whose siblings take the other cores, starts no such thread."""
+    from rbhyst.analyses.sweep import worker
+    from rbhyst.results.analysis import analyse, scene
+    from rbhyst.solve import estimate
+
+    started = []
+
+    class Counted(estimate._Ahead):
+        def __init__(self, *args):
+            started.append(args)
+            super().__init__(*args)
+
+    monkeypatch.setattr(estimate, "_Ahead", Counted)
+    deck = rbhyst.load_deck(DECKS / "seed_wri.toml")
+    system, settings = scene(deck)
+    alone = analyse(system, settings, keep=False, spare_core=False).accuracy
+    assert not started
+    beside = analyse(system, settings, keep=False, spare_core=True).accuracy
+    assert len(started) == 1
+    assert "spread" in alone["companion"] and alone["estimated_error"]["R3"] > settings.warn_error
+    assert beside["estimated_error"] == alone["estimated_error"]
+    assert beside["companion"]["spread"] == alone["companion"]["spread"]
+    worker.run_deck(deck, keep=False)
+    assert len(started) == 1
+
+
 @pytest.mark.parametrize("method", METHODS)
 def test_steps_the_stiffness_monitor_split_are_split_alike_in_the_companion(tmp_path, method):
     """A random scene of the tests whose stiffening elements make the monitor split 352 compute

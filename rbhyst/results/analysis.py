@@ -5,6 +5,7 @@ What every run goes through (``rbhyst.run``, a sweep's case, a transmissibility 
 from __future__ import annotations
 
 import dataclasses
+import os
 from pathlib import Path
 
 from rbhyst.model.deck import ANALYSIS_SECTIONS, Deck, load_deck
@@ -37,10 +38,12 @@ def plan(system: System, settings: Settings):
 
 
 def analyse(system: System, settings: Settings, keep: bool = True, csv=None, planned=None,
-            progress=None) -> Result:
+            progress=None, spare_core: bool | None = None) -> Result:
     """One run and its estimate, or (with a tolerance) the run that meets it; then its notes
     and warnings. ``csv``: where the rows are streamed (rbhyst.solve.plan.Rows; a
-    rbhyst.results.writers.CsvWriter)."""
+    rbhyst.results.writers.CsvWriter). ``spare_core``: whether the estimate may take a second
+    core (rbhyst.solve.estimate; None: where this process may run on more than one; a sweep's
+    worker says False)."""
     from rbhyst.results.checks import diagnose
     from rbhyst.solve.estimate import estimate, meet_tolerance, warnings_for
 
@@ -61,7 +64,9 @@ def analyse(system: System, settings: Settings, keep: bool = True, csv=None, pla
                 csv.wait()
             if progress is not None:
                 progress(0, 0, "estimating the error")
-            result.accuracy = estimate(result, settings, companion=companion)
+            if spare_core is None:
+                spare_core = _cores() > 1
+            result.accuracy = estimate(result, settings, companion=companion, spare_core=spare_core)
     result.notes, result.warnings = diagnose(result)
     if result.spectra is not None:
         from rbhyst.solve.located import unfinished_note
@@ -79,10 +84,18 @@ def analyse(system: System, settings: Settings, keep: bool = True, csv=None, pla
     return result
 
 
-def run_deck(deck, keep: bool = True, **options) -> Result:
+def run_deck(deck, keep: bool = True, spare_core: bool | None = None, **options) -> Result:
     """A deck's analysis in memory (``options``: integrator, dt, tolerance, estimate)."""
     system, settings = scene(deck_of(deck), **options)
-    return analyse(system, settings, keep=keep)
+    return analyse(system, settings, keep=keep, spare_core=spare_core)
+
+
+def _cores() -> int:
+    """The cores this process may run on."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # pragma: no cover - not Linux
+        return os.cpu_count() or 1
 
 
 def _companion(planned):

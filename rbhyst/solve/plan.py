@@ -297,18 +297,21 @@ class FixedStepPlan(Plan):
         x[X_CUR] = 0
         return x, st
 
-    def _call(self, load, t0, nsub, h_c, rows_every, n, x, st, buf, rot=None, levels=None, force=False):
+    def _call(self, load, t0, nsub, h_c, rows_every, n, x, st, buf, rot=None, levels=None, force=False, info=None):
         """n rows of the loop: compute steps of h_c with the coefficients of ``nsub`` substeps a
         step of dt, a row after every ``rows_every``-th of them (``rot``: the kinematics' code,
         if not the system's: kernels.layout.LOCATED). ``levels`` (compute steps,): receives each
-        step's substep level; with ``force`` each step takes the level it holds."""
+        step's substep level; with ``force`` each step takes the level it holds. ``info``
+        (kernels.INFO_SIZE,): receives how the loop ended, the caller's own (two threads may
+        step one plan: an estimate's companion and its probe)."""
         from rbhyst.solve.kernels.compiled import kernel
 
         s = self.settings
         ne, n_q = self.bvec.shape
         if n > len(buf.d):  # the compiled loop checks no bounds: never let it write past a buffer
             raise RuntimeError(f"a chunk of {n} rows does not fit its buffers of {len(buf.d)}")
-        self.info = np.zeros(kernels.INFO_SIZE)
+        if info is None:
+            info = np.zeros(kernels.INFO_SIZE)
         if levels is None:
             levels = np.empty(n * rows_every, dtype=np.int64)
         if len(levels) < n * rows_every:
@@ -323,7 +326,7 @@ class FixedStepPlan(Plan):
                                         t0, h_c, rows_every, n, s.max_omega_dt, self.level0[nsub], s.max_substep_level,
                                         s.newton_tol, s.newton_max_iter, x, st, np.zeros((ne, N_STATE)), np.zeros((ne, 2)),
                                         np.zeros((ne, n_q)), np.zeros((N_W, n_q)), np.zeros((n_q, n_q)), buf.d, buf.v, buf.u, buf.f, buf.e,
-                                        levels, force, self.info)
+                                        levels, force, info)
 
     def compute_nodes(self, levels: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(t, h, out): every compute node's time from 0, the step the loop takes after it
@@ -378,11 +381,12 @@ class FixedStepPlan(Plan):
             level = np.empty(steps, dtype=np.int64) if levels is None else levels[node:node + steps].copy()
             node += steps
             sub = nsub if fine else 1
+            info = np.zeros(kernels.INFO_SIZE)
             tic = time.perf_counter()
             written = self._call(load, s.dt * first, nsub, s.dt / nsub, nsub // sub, n_out * sub, x, st, buf, rot,
-                                 level, levels is not None)
+                                 level, levels is not None, info)
             wall = time.perf_counter() - tic
-            _raise_on_failure(system, s, self.info)
+            _raise_on_failure(system, s, info)
             assert written == n_out * sub, "the loop wrote fewer rows than asked"
             t = t_c[1:] if sub > 1 else s.dt * (first + 1 + np.arange(n_out))  # t_n = n dt, never accumulated
             m = n_out * sub

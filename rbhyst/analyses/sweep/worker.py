@@ -121,7 +121,7 @@ def run_deck(deck, keep: bool):
     third of a case."""
     from rbhyst.results import analysis
 
-    return analysis.run_deck(deck, keep=keep)
+    return analysis.run_deck(deck, keep=keep, spare_core=False)  # (its siblings take the other cores)
 
 
 def without_timings(d: dict) -> dict:
