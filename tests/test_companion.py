@@ -183,7 +183,8 @@ def test_the_check_on_a_core_of_its_own_gives_the_same_estimate(monkeypatch):
     """With a spare core the probe steps on a thread of its own while the companion runs (both
     step the same plan: each chunk's end reported into its own array): the seed deck, which
     warns and is checked, gets the same estimate and the same spread to the bit either way; a
-    sweep's worker, whose siblings take the other cores, starts no such thread."""
+    sweep's worker, whose siblings take the other cores, starts no such thread, nor a run too
+    short to pay for one."""
     from rbhyst.analyses.sweep import worker
     from rbhyst.results.analysis import analyse, scene
     from rbhyst.solve import estimate
@@ -206,6 +207,9 @@ def test_the_check_on_a_core_of_its_own_gives_the_same_estimate(monkeypatch):
     assert beside["estimated_error"] == alone["estimated_error"]
     assert beside["companion"]["spread"] == alone["companion"]["spread"]
     worker.run_deck(deck, keep=False)
+    assert len(started) == 1
+    short = deck.with_values({"analysis.duration": 2.0})  # 16,000 element steps: a thread would cost more
+    analyse(*scene(short), keep=False, spare_core=True)
     assert len(started) == 1
 
 

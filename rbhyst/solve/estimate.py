@@ -288,6 +288,11 @@ COMPANION_PROBE = 1e-3
 COMPANION_LARGEST = 0.2
 #: the modified equation is a series in omega h: beyond this the companion is not trusted
 COMPANION_OMEGA_DT = 1.0
+#: the check runs beside the companion (a spare core) from this many element steps of the run
+#: (about 2 ms of stepping): below, a thread's start and the two threads' turns at Python's lock
+#: cost more than it saves (the random scenes of the tests, 100-900 steps: their median estimate
+#: 4.9 -> 6.2 times their stepping with a thread, the seed deck's 320,000: 4.0 -> 2.7)
+BESIDE_MIN_WORK = 100_000
 
 
 def _from_companion(result, settings, plan, tap, spare_core: bool = False) -> dict | None:
@@ -305,7 +310,8 @@ def _from_companion(result, settings, plan, tap, spare_core: bool = False) -> di
     cols = estimate_columns(result.layout)
     keys, families = [k for k, _, _ in cols], [f for _, _, f in cols]
     companion = Companion(plan, tap, result.compare_every)
-    ahead = _Ahead(companion.probe, COMPANION_PROBE) if spare_core else None
+    work = stats.steps_taken * plan.bvec.shape[0]
+    ahead = _Ahead(companion.probe, COMPANION_PROBE) if spare_core and work >= BESIDE_MIN_WORK else None
     diff, wall = companion.run()
     probed = ahead.result() if ahead is not None else None  # (never left running)
     if diff is None:
