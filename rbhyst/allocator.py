@@ -8,7 +8,8 @@ error estimate in the command (33 -> 24 ms). Raising the thresholds keeps freed 
 heap for the next array: the process's memory stays at its peak, never growing with the
 cases. And one heap for every thread: glibc gives a thread an arena of its own, whose freed
 memory no other thread reuses, so that what the threads formatting time_history.csv freed was
-lost to the error estimate after them (the seed deck's estimate in the command 25 -> 30 ms).
+lost to the error estimate after them (the seed deck's estimate in the command took 30 ms, 25
+with one heap).
 Not set in a process that merely imports rbhyst (a notebook keeps its own allocator).
 """
 

@@ -90,31 +90,27 @@ class CsvWriter:
 
     def close(self) -> None:
         """The file closes after its last write, whether or not a write failed; wait() for it."""
-        if self._fh is not None:
-            self._after_last(self._fh.close, always=True)
-            self._fh = None
-            self._texts = None  # (their buffers freed once the last chunk is written, for the next arrays)
+        if self._fh is None:
+            return
+        fh, before = self._fh, self._last
+        self._fh = None
+        self._texts = None  # (their buffers freed once the last chunk is written, for the next arrays)
+
+        def step():
+            if before is not None:
+                before.join()
+            try:
+                fh.close()
+            except BaseException as exc:  # (raised in the caller's thread by wait())
+                self._error = self._error or exc
+
+        self._last = threading.Thread(target=step, name=f"{self.path.name} closer", daemon=True)
+        self._last.start()
 
     def wait(self) -> None:
         """Return once every chunk added so far is written; raise what a write raised."""
         self._waiting.clear()
         self._join(self._last)
-
-    def _after_last(self, work, *args, always: bool = False) -> threading.Thread:
-        before = self._last
-
-        def step():
-            if before is not None:
-                before.join()
-            if self._error is None or always:
-                try:
-                    work(*args)
-                except BaseException as exc:  # (raised in the caller's thread by wait() or the next add())
-                    self._error = self._error or exc
-
-        self._last = threading.Thread(target=step, name=f"{self.path.name} writer", daemon=True)
-        self._last.start()
-        return self._last
 
     def _join(self, thread: threading.Thread | None) -> None:
         if thread is not None:

@@ -93,7 +93,8 @@ def compiler():
 
 def _release_the_gil() -> None:
     """Every export lets go of Python's lock while it runs, as ``nogil=True`` makes a JIT kernel:
-    a thread formats time_history.csv while the run steps (rbhyst.results.writers). numba's
+    threads format time_history.csv while the run steps (rbhyst.results.writers), and the
+    companion's check steps beside the companion (rbhyst.solve.estimate). numba's
     ahead-of-time compiler has no option for it; it takes the flags of its compilation from
     this name, so that a subclass setting release_gil there is the whole change."""
     import numba.pycc.compiler as pycc
