@@ -11,7 +11,7 @@ from pathlib import Path
 PACKAGE = Path(__file__).resolve().parent.parent / "rbhyst"
 
 #: module prefix -> layer (lowest 0); a module belongs to its longest matching prefix
-LAYERS = {"rbhyst._version": 0, "rbhyst.errors": 0, "rbhyst.allocator": 0, "rbhyst.files": 1, "rbhyst.model": 2, "rbhyst.solve": 3,
+LAYERS = {"rbhyst._version": 0, "rbhyst.errors": 0, "rbhyst.allocator": 0, "rbhyst.cores": 0, "rbhyst.files": 1, "rbhyst.model": 2, "rbhyst.solve": 3,
           "rbhyst.results": 4, "rbhyst.analyses": 5, "rbhyst.report": 6}
 TOP = 7
 

@@ -18,8 +18,9 @@ from typing import Callable
 
 
 def _fork_is_safe() -> bool:
-    return (sys.platform.startswith("linux") and threading.active_count() == 1
-            and len(os.sched_getaffinity(0)) > 1)
+    from rbhyst.cores import usable_cores
+
+    return sys.platform.startswith("linux") and threading.active_count() == 1 and usable_cores() > 1
 
 
 def draw_all(jobs: list[Callable[[], None]]) -> None:

@@ -5,7 +5,6 @@ What every run goes through (``rbhyst.run``, a sweep's case, a transmissibility 
 from __future__ import annotations
 
 import dataclasses
-import os
 from pathlib import Path
 
 from rbhyst.model.deck import ANALYSIS_SECTIONS, Deck, load_deck
@@ -65,7 +64,9 @@ def analyse(system: System, settings: Settings, keep: bool = True, csv=None, pla
             if progress is not None:
                 progress(0, 0, "estimating the error")
             if spare_core is None:
-                spare_core = _cores() > 1
+                from rbhyst.cores import usable_cores
+
+                spare_core = usable_cores() > 1
             result.accuracy = estimate(result, settings, companion=companion, spare_core=spare_core)
     result.notes, result.warnings = diagnose(result)
     if result.spectra is not None:
@@ -89,13 +90,6 @@ def run_deck(deck, keep: bool = True, spare_core: bool | None = None, **options)
     system, settings = scene(deck_of(deck), **options)
     return analyse(system, settings, keep=keep, spare_core=spare_core)
 
-
-def _cores() -> int:
-    """The cores this process may run on."""
-    try:
-        return len(os.sched_getaffinity(0))
-    except AttributeError:  # pragma: no cover - not Linux
-        return os.cpu_count() or 1
 
 
 def _companion(planned):

@@ -7,7 +7,6 @@ back one dict per case, so that the results are the same bits wherever they ran.
 from __future__ import annotations
 
 import itertools
-import os
 import signal
 import time
 from concurrent import futures as cf
@@ -104,10 +103,9 @@ def cluster_settings(cluster, workers: int | None, scheduler: str | None, tls_ca
 
 
 def default_workers() -> int:
-    try:
-        return max(1, len(os.sched_getaffinity(0)))
-    except AttributeError:  # pragma: no cover - not Linux
-        return max(1, os.cpu_count() or 1)
+    from rbhyst.cores import usable_cores
+
+    return usable_cores()
 
 
 class LocalPool:
