@@ -140,7 +140,7 @@ def test_forces_re_driven_with_the_reversal_located(tmp_path):
     drive(p[0], 0.02 * np.sin(2 * np.pi * 0.8 * fine_t + 0.3), *fine)
     exact = fine[0][::1000]
     located = np.empty((len(t), 1))
-    assert kernel("redrive")(p, np.zeros((1, 6)), np.ascontiguousarray(u[:, None]), located) == -1
+    assert kernel("redrive")(p, np.zeros((1, 6)), np.ascontiguousarray(u[:, None]), located, 0, 1) == -1
     plain = np.empty(len(t)), np.empty(len(t)), np.empty(len(t))
     drive(p[0], u, *plain)
     after = t > 0.5
@@ -179,6 +179,28 @@ def test_the_probe_repeats_the_run_and_moves_a_determined_history_in_proportion(
     assert np.all((1.98 < twice) & (twice < 2.02)), twice
 
 
+def test_the_redrive_in_two_halves_is_the_redrive_whole():
+    """The elements' forces re-driven in two halves on two threads (each its own range of the
+    elements, into one array) are the forces re-driven at once, to the bit; an element driven
+    out of its range is found in either half."""
+    from rbhyst.model.hysteresis import parameter_set
+    from rbhyst.solve.companion import redriven
+    from conftest import TABLE3_SHEAR
+
+    one = parameter_set(TABLE3_SHEAR["loading"], TABLE3_SHEAR["unloading"])
+    params = np.ascontiguousarray(np.repeat(one[None], 5, axis=0))
+    t = np.linspace(0.0, 4.0, 20_001)
+    u = np.ascontiguousarray(0.02 * np.sin(np.outer(2 * np.pi * 0.8 * t, 1.0 + 0.1 * np.arange(5)) + 0.3))
+    st0 = np.zeros((5, 6))
+    whole, halves = redriven(params, st0, u), redriven(params, st0, u, halves=True)
+    assert whole is not None and np.array_equal(whole, halves)
+    assert len(np.unique(whole[-1])) == 5  # (five histories, not one copied)
+    for e in (1, 4):  # in the first half, and in the second
+        far = u.copy()
+        far[-10:, e] = 1e3
+        assert redriven(params, st0, far) is None and redriven(params, st0, far, halves=True) is None
+
+
 def test_the_check_on_a_core_of_its_own_gives_the_same_estimate(monkeypatch):
     """With a spare core the probe steps on a thread of its own while the companion runs (both
     step the same plan: each chunk's end reported into its own array): the seed deck, which
@@ -187,16 +209,17 @@ def test_the_check_on_a_core_of_its_own_gives_the_same_estimate(monkeypatch):
     short to pay for one."""
     from rbhyst.analyses.sweep import worker
     from rbhyst.results.analysis import analyse, scene
-    from rbhyst.solve import estimate
+    from rbhyst.solve import beside as threads
 
     started = []
 
-    class Counted(estimate._Ahead):
-        def __init__(self, *args):
-            started.append(args)
-            super().__init__(*args)
+    class Counted(threads.Beside):
+        def __init__(self, *args, name=""):
+            if "check" in name:  # (the re-drive's second half is another thread)
+                started.append(args)
+            super().__init__(*args, name=name)
 
-    monkeypatch.setattr(estimate, "_Ahead", Counted)
+    monkeypatch.setattr(threads, "Beside", Counted)
     deck = rbhyst.load_deck(DECKS / "seed_wri.toml")
     system, settings = scene(deck)
     alone = analyse(system, settings, keep=False, spare_core=False).accuracy

@@ -75,33 +75,41 @@ def unfit(plan) -> str | None:
 class RunTap:
     """A run's tap (plan.run): at every compute step its coordinates, velocities and element
     forces, and the method's own acceleration A = M^-1 (p - R - C V) at the nodes, the load as
-    the loop took it."""
+    the loop took it, into arrays of the whole run (its compute nodes are known before it runs:
+    the stiffness monitor splits a step within it, not into more rows)."""
 
     def __init__(self, plan):
         self.minv = plan.minv
         self.layout = plan.layout
         self.rot = plan.system.rotation_index
         self.c = plan.cm[:plan.system.n] if plan.damped else None
+        n, ne = plan.system.n, plan.bvec.shape[0]
+        nodes = int(np.sum(np.diff(plan.bounds) * plan.substeps)) + 1
         x, st = plan.initial_state()
         start = plan.start_row(x, st)
-        self.a = [x[None, x_slice(plan.system.n, 2)].copy()]
-        self.d, self.v, self.f = [start.d], [start.v], [start.f]
-        self.load = []  # the scene's load at every compute node (the companion's, less its source)
-        self.levels = []  # the substep level of every compute step (the stiffness monitor's)
+        self.a, self.d, self.v, self.f = (np.empty((nodes, n)), np.empty((nodes, n)), np.empty((nodes, n)),
+                                          np.empty((nodes, ne)))
+        self.a[0], self.d[0], self.v[0], self.f[0] = x[x_slice(n, 2)], start.d[0], start.v[0], start.f[0]
+        self.load = None  # the scene's load at every compute node (the companion's, less its source)
+        self.levels = np.empty(nodes - 1, dtype=np.int64)  # every compute step's substep level (the monitor's)
+        self.next = 1  # the next node to fill
         self.wall_s = 0.0  # what tapping cost the run: the estimate's
 
     def __call__(self, load: np.ndarray, raw, levels: np.ndarray) -> None:
         tic = time.perf_counter()
         n = len(self.minv)
+        k, m = self.next, len(raw.t)
+        if self.load is None:
+            self.load = np.empty((len(self.a), load.shape[1]))
+            self.load[0] = load[0]
         force = loads_at(load[1:], raw.d, n, self.rot) - self.layout.restoring(raw.f, raw.d)
         if self.c is not None:
             force -= raw.v @ self.c.T
-        self.a.append(force * self.minv)
-        self.load.append(load if not self.load else load[1:])  # (chunks share their first node)
-        self.levels.append(levels)
-        self.d.append(raw.d.copy())
-        self.v.append(raw.v.copy())
-        self.f.append(raw.f.copy())
+        np.multiply(force, self.minv, out=self.a[k:k + m])
+        self.load[k:k + m] = load[1:]  # (chunks share their first node)
+        self.levels[k - 1:k - 1 + m] = levels
+        self.d[k:k + m], self.v[k:k + m], self.f[k:k + m] = raw.d, raw.v, raw.f
+        self.next = k + m
         self.wall_s += time.perf_counter() - tic
 
 
@@ -128,28 +136,28 @@ class Companion:
     def __init__(self, plan, tap: RunTap, compare_every: int):
         system, s = plan.system, plan.settings
         self.plan = plan
-        a, v = np.concatenate(tap.a), np.concatenate(tap.v)
+        assert tap.next == len(tap.a), "the run's tap missed compute steps"
+        a, v = tap.a, tap.v
         # the steps the run's stiffness monitor split are the companion's too (its source is the
         # method's error at the substeps' h)
-        self.levels = np.concatenate(tap.levels)
+        self.levels = tap.levels
         t, h, out_nodes = plan.compute_nodes(self.levels)
         self.extra, self.offset = source_and_offset(s.integrator, a, v, t, h, system.mass, tap.c, system.K0,
                                                     _near_breaks(system.excitation, t, h))
         # the run at the compared steps, its velocities read on its curve
         self.rows = out_nodes[::compare_every]
         self.take = _evenly(self.rows)
-        self.d, self.v_run = np.concatenate(tap.d)[self.take], v[self.take]
+        self.d, self.v_run = tap.d[self.take], v[self.take]
         self.v = self.v_run - self.offset[self.take]
-        self.f = np.concatenate(tap.f)[self.take]
-        self.load = np.concatenate(tap.load)
+        self.f = tap.f[self.take]
+        self.load = tap.load
 
-    def run(self):
+    def run(self, halves: bool = False):
         """(dd, dv, df): the run's coordinates, velocities and element forces less the companion's
         at the compared steps (history.Layout.largest_change makes every column's of them), and
         the companion's kernel seconds; None where an element's re-driven force left its range or
-        Newton's iterations split a step further than the run's."""
-        from rbhyst.solve.kernels.compiled import kernel
-
+        Newton's iterations split a step further than the run's. ``halves``: the elements' forces
+        re-driven in two halves, one on a thread of its own (a spare core)."""
         plan = self.plan
         x, st = plan.initial_state()
         x[x_slice(plan.system.n, 1)] = -self.offset[0]
@@ -167,8 +175,8 @@ class Companion:
                 return None, wall
             node += len(levels)
             keep(load, raw)
-        f = np.empty_like(keep.u)
-        if kernel("redrive")(plan.params, st0, keep.u, f) >= 0:
+        f = redriven(plan.params, st0, keep.u, halves)
+        if f is None:
             return None, wall
         rows = self.take
         return (self.d - keep.d[rows], self.v - keep.v[rows], self.f - f[rows]), wall
@@ -203,6 +211,26 @@ class Companion:
         """Whether a chunk's compute steps from ``node`` on took the run's substep levels (only
         Newton's failure splits a forced step further)."""
         return np.array_equal(levels, self.levels[node:node + len(levels)])
+
+
+def redriven(params: np.ndarray, st0: np.ndarray, u: np.ndarray, halves: bool = False) -> np.ndarray | None:
+    """(samples, ne) every element's force driven from its state st0 along its deformations u,
+    each reversal located within its step (kernels.redrive), or None where one left its range;
+    with ``halves`` the second half of the elements on a thread of its own, beside the first."""
+    from rbhyst.solve.kernels.compiled import kernel
+
+    f = np.empty_like(u)
+    ne = u.shape[1]
+    cut = ne // 2 if halves else ne
+    other = None
+    if cut < ne:
+        from rbhyst.solve.beside import Beside
+
+        other = Beside(kernel("redrive"), params, st0, u, f, cut, ne, name="rbhyst redrive")
+    bad = kernel("redrive")(params, st0, u, f, 0, cut)
+    if other is not None and other.result() >= 0:
+        return None
+    return f if bad < 0 else None
 
 
 def source_and_offset(method: str, a: np.ndarray, v: np.ndarray, t: np.ndarray, h: np.ndarray,

@@ -301,7 +301,9 @@ def _from_companion(result, settings, plan, tap, spare_core: bool = False) -> di
     run's converged, an element out of its range, an estimate past COMPANION_LARGEST, a history
     the check finds undetermined. With ``spare_core`` the check (the probe) runs on a thread of
     its own beside the companion, before it is known to be needed (the kernels hold no lock of
-    Python's): the seed deck's estimate 24 -> 18 ms; its result is dropped where it is not."""
+    Python's), and the elements' re-drive in two halves: the seed deck's estimate 24 -> 18 ms;
+    the check's result is dropped where it is not needed."""
+    from rbhyst.solve.beside import Beside
     from rbhyst.solve.companion import Companion
 
     stats = result.stats
@@ -310,17 +312,27 @@ def _from_companion(result, settings, plan, tap, spare_core: bool = False) -> di
     cols = estimate_columns(result.layout)
     keys, families = [k for k, _, _ in cols], [f for _, _, f in cols]
     companion = Companion(plan, tap, result.compare_every)
-    work = stats.steps_taken * plan.bvec.shape[0]
-    ahead = _Ahead(companion.probe, COMPANION_PROBE) if spare_core and work >= BESIDE_MIN_WORK else None
-    diff, wall = companion.run()
-    probed = ahead.result() if ahead is not None else None  # (never left running)
+    change = result.layout.largest_change
+
+    def probe():
+        """How far the run moves under COMPANION_PROBE of the companion's source: every
+        column's largest change (None: see Companion.probe), and the kernel seconds."""
+        moved, took = companion.probe(COMPANION_PROBE)
+        return (None if moved is None else change(*moved)), took
+
+    beside = spare_core and stats.steps_taken * plan.bvec.shape[0] >= BESIDE_MIN_WORK
+    ahead = Beside(probe, name="rbhyst companion's check") if beside else None
+    try:
+        diff, wall = companion.run(halves=beside)
+        if diff is not None:
+            # every column against the run's peaks (the companion's are the same to within the
+            # error: a second-order change of a relative error)
+            peaks = largest_abs(result.compared[:, 1:])
+            err = relative_to_peaks(change(*diff), peaks, keys, families, result.system)
+    finally:
+        probed = ahead.result() if ahead is not None else None  # (never left running)
     if diff is None:
         return None
-    # every column against the run's peaks (the companion's are the same to within the error: a
-    # second-order change of a relative error)
-    peaks = largest_abs(result.compared[:, 1:])
-    change = result.layout.largest_change
-    err = relative_to_peaks(change(*diff), peaks, keys, families, result.system)
     info = {"steps": int(stats.steps_taken), "wall_s": wall}
     if max(err, default=0.0) > COMPANION_LARGEST:
         return None
@@ -328,10 +340,10 @@ def _from_companion(result, settings, plan, tap, spare_core: bool = False) -> di
         # near the warning: is the history determined? The run again, COMPANION_PROBE of the
         # companion's source added: a determined history moves by that fraction of the error, a
         # sensitive one as much as the run itself (then the adaptive solutions say how much)
-        moved, took = probed if probed is not None else companion.probe(COMPANION_PROBE)
+        moved, took = probed if probed is not None else probe()
         if moved is None:
             return None
-        spread = relative_to_peaks(change(*moved), peaks, keys, families, result.system)
+        spread = relative_to_peaks(moved, peaks, keys, families, result.system)
         info.update(wall_s=wall + took, probe=COMPANION_PROBE, spread=float(max(spread, default=0.0)))
         if info["spread"] > settings.warn_error:
             return None
@@ -339,30 +351,6 @@ def _from_companion(result, settings, plan, tap, spare_core: bool = False) -> di
             "method": f"against the run's companion: {settings.integrator} with its leading local error taken out "
                       "of the load (the method's modified equation) and every element's reversal located within "
                       "its step"}
-
-
-class _Ahead:
-    """fn(*args) on a thread of its own, started now; result() waits for it and raises what it
-    raised."""
-
-    def __init__(self, fn, *args):
-        import threading
-
-        self._out, self._err = None, None
-        self._thread = threading.Thread(target=self._run, args=(fn, args), name="companion's check", daemon=True)
-        self._thread.start()
-
-    def _run(self, fn, args) -> None:
-        try:
-            self._out = fn(*args)
-        except BaseException as exc:
-            self._err = exc
-
-    def result(self):
-        self._thread.join()
-        if self._err is not None:
-            raise self._err
-        return self._out
 
 
 def _settle_status(out: dict, settings) -> None:
