@@ -139,12 +139,12 @@ def test_forces_re_driven_with_the_reversal_located(tmp_path):
     fine = np.empty(len(fine_t)), np.empty(len(fine_t)), np.empty(len(fine_t))
     drive(p[0], 0.02 * np.sin(2 * np.pi * 0.8 * fine_t + 0.3), *fine)
     exact = fine[0][::1000]
-    located = np.empty((len(t), 1))
+    located = np.empty((1, len(t)))
     assert kernel("redrive")(p, np.zeros((1, 6)), np.ascontiguousarray(u[:, None]), located, 0, 1) == -1
     plain = np.empty(len(t)), np.empty(len(t)), np.empty(len(t))
     drive(p[0], u, *plain)
     after = t > 0.5
-    err_located = np.max(np.abs(located[after, 0] - exact[after]))
+    err_located = np.max(np.abs(located[0, after] - exact[after]))
     err_plain = np.max(np.abs(plain[0][after] - exact[after]))
     assert err_located < 0.05 * err_plain, (err_located, err_plain)
 
@@ -179,11 +179,12 @@ def test_the_probe_repeats_the_run_and_moves_a_determined_history_in_proportion(
     assert np.all((1.98 < twice) & (twice < 2.02)), twice
 
 
-def test_the_redrive_in_two_halves_is_the_redrive_whole():
-    """The elements' forces re-driven in two halves on two threads (each its own range of the
-    elements, into one array) are the forces re-driven at once, to the bit; an element driven
-    out of its range is found in either half."""
+def test_the_redrive_shared_between_two_threads_is_the_redrive_whole():
+    """The elements' forces re-driven a few at a time by two threads (each piece its own range
+    of the elements, into one array) are the forces re-driven at once, to the bit; an element
+    driven out of its range is found in any piece."""
     from rbhyst.model.hysteresis import parameter_set
+    from rbhyst.solve.beside import Beside, Pieces
     from rbhyst.solve.companion import redriven
     from conftest import TABLE3_SHEAR
 
@@ -192,13 +193,56 @@ def test_the_redrive_in_two_halves_is_the_redrive_whole():
     t = np.linspace(0.0, 4.0, 20_001)
     u = np.ascontiguousarray(0.02 * np.sin(np.outer(2 * np.pi * 0.8 * t, 1.0 + 0.1 * np.arange(5)) + 0.3))
     st0 = np.zeros((5, 6))
-    whole, halves = redriven(params, st0, u), redriven(params, st0, u, halves=True)
-    assert whole is not None and np.array_equal(whole, halves)
-    assert len(np.unique(whole[-1])) == 5  # (five histories, not one copied)
-    for e in (1, 4):  # in the first half, and in the second
+
+    def shared(u):
+        pieces = Pieces()
+        other = Beside(pieces.work)
+        try:
+            return redriven(params, st0, u, pieces)
+        finally:
+            pieces.close()
+            other.result()
+
+    whole = redriven(params, st0, u)
+    assert whole is not None and np.array_equal(whole, shared(u))
+    assert len(np.unique(whole[:, -1])) == 5  # (five histories, not one copied)
+    for e in (1, 4):  # in the first piece, and in the last
         far = u.copy()
         far[-10:, e] = 1e3
-        assert redriven(params, st0, far) is None and redriven(params, st0, far, halves=True) is None
+        assert redriven(params, st0, far) is None and shared(far) is None
+
+
+def test_pieces_are_each_taken_once_and_a_failure_reaches_the_caller():
+    """Pieces: every piece called once whoever takes it; a thread waiting for pieces goes on
+    when they are closed; what a piece raised is raised by finish, in the caller's thread."""
+    import threading
+
+    from rbhyst.solve.beside import Beside, Pieces
+
+    seen, lock = [], threading.Lock()
+
+    def note(k):
+        with lock:
+            seen.append(k)
+
+    pieces = Pieces()
+    other = Beside(pieces.work)
+    pieces.open(note, [(k,) for k in range(200)])
+    pieces.finish()
+    other.result()
+    assert sorted(seen) == list(range(200))
+    idle = Pieces()
+    waiting = Beside(idle.work)
+    idle.close()
+    assert waiting.result() is None
+
+    def fail(k):
+        raise ValueError(f"piece {k}")
+
+    broken = Pieces()
+    broken.open(fail, [(1,), (2,)])
+    with pytest.raises(ValueError, match="piece 1"):
+        broken.finish()
 
 
 def test_the_check_on_a_core_of_its_own_gives_the_same_estimate(monkeypatch):

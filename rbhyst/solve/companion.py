@@ -75,8 +75,9 @@ def unfit(plan) -> str | None:
 class RunTap:
     """A run's tap (plan.run): at every compute step its coordinates, velocities and element
     forces, and the method's own acceleration A = M^-1 (p - R - C V) at the nodes, the load as
-    the loop took it, into arrays of the whole run (its compute nodes are known before it runs:
-    the stiffness monitor splits a step within it, not into more rows)."""
+    the loop took it, in arrays of the whole run (its compute nodes are known before it runs:
+    the stiffness monitor splits a step within it, not into more rows). The loop writes the
+    rows straight into them (``buffers``): no copy."""
 
     def __init__(self, plan):
         self.minv = plan.minv
@@ -87,18 +88,23 @@ class RunTap:
         nodes = int(np.sum(np.diff(plan.bounds) * plan.substeps)) + 1
         x, st = plan.initial_state()
         start = plan.start_row(x, st)
-        self.a, self.d, self.v, self.f = (np.empty((nodes, n)), np.empty((nodes, n)), np.empty((nodes, n)),
-                                          np.empty((nodes, ne)))
-        self.a[0], self.d[0], self.v[0], self.f[0] = x[x_slice(n, 2)], start.d[0], start.v[0], start.f[0]
+        self.a = np.empty((nodes, n))
+        self._rows = _Rows(start, nodes)  # d, v, f at every node; u and e a chunk's at a time
+        self.a[0] = x[x_slice(n, 2)]
+        self.d, self.v, self.f = self._rows.d, self._rows.v, self._rows.f
         self.load = None  # the scene's load at every compute node (the companion's, less its source)
         self.levels = np.empty(nodes - 1, dtype=np.int64)  # every compute step's substep level (the monitor's)
         self.next = 1  # the next node to fill
         self.wall_s = 0.0  # what tapping cost the run: the estimate's
 
+    def buffers(self, node: int, rows: int):
+        return self._rows.buffers(node, rows)
+
     def __call__(self, load: np.ndarray, raw, levels: np.ndarray) -> None:
         tic = time.perf_counter()
         n = len(self.minv)
         k, m = self.next, len(raw.t)
+        assert np.shares_memory(raw.d, self.d[k:k + m]), "the rows are written into the tap's arrays"
         if self.load is None:
             self.load = np.empty((len(self.a), load.shape[1]))
             self.load[0] = load[0]
@@ -108,25 +114,37 @@ class RunTap:
         np.multiply(force, self.minv, out=self.a[k:k + m])
         self.load[k:k + m] = load[1:]  # (chunks share their first node)
         self.levels[k - 1:k - 1 + m] = levels
-        self.d[k:k + m], self.v[k:k + m], self.f[k:k + m] = raw.d, raw.v, raw.f
         self.next = k + m
         self.wall_s += time.perf_counter() - tic
 
 
-class CompanionRows:
-    """The companion's tap: every compute node's coordinates, velocities and element deformations,
-    into arrays of them all (the start row first)."""
+class _Rows:
+    """Rows of every compute node from the start row on, which the loop writes into (plan.chunks'
+    ``into``): those of ``keep`` (d, v, u, f) in arrays of them all, the others a chunk's at a
+    time."""
 
-    def __init__(self, start, nodes: int):
-        self.d, self.v = np.empty((nodes, start.d.shape[1])), np.empty((nodes, start.v.shape[1]))
-        self.u = np.empty((nodes, start.u.shape[1]))
-        self.next = 0
-        self(None, start)
+    def __init__(self, start, nodes: int, keep=("d", "v", "f")):
+        self._widths = {k: getattr(start, k).shape[1] for k in ("d", "v", "u", "f", "e")}
+        self._keep = keep
+        for k in keep:
+            whole = np.empty((nodes, self._widths[k]))
+            whole[0] = getattr(start, k)[0]
+            setattr(self, k, whole)
+        self._spare = {}
 
-    def __call__(self, load, raw) -> None:
-        k, m = self.next, len(raw.t)
-        self.d[k:k + m], self.v[k:k + m], self.u[k:k + m] = raw.d, raw.v, raw.u
-        self.next = k + m
+    def buffers(self, node: int, rows: int):
+        from types import SimpleNamespace
+
+        out = {}
+        for k, width in self._widths.items():
+            if k in self._keep:
+                out[k] = getattr(self, k)[node + 1:node + 1 + rows]
+            else:
+                spare = self._spare.get(k)
+                if spare is None or len(spare) < rows:
+                    spare = self._spare[k] = np.empty((rows, width))
+                out[k] = spare[:rows]
+        return SimpleNamespace(**out)
 
 
 class Companion:
@@ -152,34 +170,41 @@ class Companion:
         self.f = tap.f[self.take]
         self.load = tap.load
 
-    def run(self, halves: bool = False):
+    def run(self, pieces=None):
         """(dd, dv, df): the run's coordinates, velocities and element forces less the companion's
         at the compared steps (history.Layout.largest_change makes every column's of them), and
         the companion's kernel seconds; None where an element's re-driven force left its range or
-        Newton's iterations split a step further than the run's. ``halves``: the elements' forces
-        re-driven in two halves, one on a thread of its own (a spare core)."""
+        Newton's iterations split a step further than the run's. ``pieces`` (beside.Pieces): the
+        elements' forces re-driven a few at a time, shared with another thread; closed here
+        whatever happens."""
+        try:
+            return self._run(pieces)
+        finally:
+            if pieces is not None:
+                pieces.close()
+
+    def _run(self, pieces):
         plan = self.plan
         x, st = plan.initial_state()
         x[x_slice(plan.system.n, 1)] = -self.offset[0]
         st0 = st[0].copy()  # (the loop steps st in place)
-        keep = CompanionRows(plan.start_row(x, st), len(self.extra))
+        keep = _Rows(plan.start_row(x, st), len(self.extra), keep=("d", "v", "u"))
         wall = 0.0
         # every turn put where it falls within its step (LOCATED): the companion's motion then
         # carries none of the run's O(h^2) branch origins, whose drift (a body that creeps under
         # cyclic load) it would otherwise share and cancel
         node = 0
         for _, _, _, load, raw, levels, took in plan.chunks(x, st, fine=True, extra=self.extra, rot=LOCATED,
-                                                           loads=self.load, levels=self.levels):
+                                                           loads=self.load, levels=self.levels, into=keep):
             wall += took
             if not self._stepped_as_run(levels, node):
                 return None, wall
             node += len(levels)
-            keep(load, raw)
-        f = redriven(plan.params, st0, keep.u, halves)
+        f = redriven(plan.params, st0, keep.u, pieces)
         if f is None:
             return None, wall
         rows = self.take
-        return (self.d - keep.d[rows], self.v - keep.v[rows], self.f - f[rows]), wall
+        return (self.d - keep.d[rows], self.v - keep.v[rows], self.f - f.T[rows]), wall
 
     def probe(self, eps: float):
         """(dd, dv, df): how far the run moves (its coordinates, velocities and element forces at
@@ -213,24 +238,32 @@ class Companion:
         return np.array_equal(levels, self.levels[node:node + len(levels)])
 
 
-def redriven(params: np.ndarray, st0: np.ndarray, u: np.ndarray, halves: bool = False) -> np.ndarray | None:
-    """(samples, ne) every element's force driven from its state st0 along its deformations u,
-    each reversal located within its step (kernels.redrive), or None where one left its range;
-    with ``halves`` the second half of the elements on a thread of its own, beside the first."""
+#: the elements re-driven a piece at a time where two threads share the work (rbhyst.solve.beside.Pieces)
+ELEMENTS_A_PIECE = 1
+
+
+def redriven(params: np.ndarray, st0: np.ndarray, u: np.ndarray, pieces=None) -> np.ndarray | None:
+    """(ne, samples) every element's force driven from its state st0 along its deformations u
+    (samples, ne), each reversal located within its step (kernels.redrive), or None where one
+    left its range; with ``pieces`` (a beside.Pieces another thread also works on) a few
+    elements at a time, by whichever thread is free."""
     from rbhyst.solve.kernels.compiled import kernel
 
-    f = np.empty_like(u)
     ne = u.shape[1]
-    cut = ne // 2 if halves else ne
-    other = None
-    if cut < ne:
-        from rbhyst.solve.beside import Beside
+    f = np.empty((ne, u.shape[0]))
+    bad = []
+    drive = kernel("redrive")
 
-        other = Beside(kernel("redrive"), params, st0, u, f, cut, ne, name="rbhyst redrive")
-    bad = kernel("redrive")(params, st0, u, f, 0, cut)
-    if other is not None and other.result() >= 0:
-        return None
-    return f if bad < 0 else None
+    def piece(first, stop):
+        if drive(params, st0, u, f, first, stop) >= 0:
+            bad.append(first)
+
+    if pieces is None:
+        piece(0, ne)
+    else:
+        pieces.open(piece, [(e, min(e + ELEMENTS_A_PIECE, ne)) for e in range(0, ne, ELEMENTS_A_PIECE)])
+        pieces.finish()
+    return None if bad else f
 
 
 def source_and_offset(method: str, a: np.ndarray, v: np.ndarray, t: np.ndarray, h: np.ndarray,

@@ -355,19 +355,24 @@ class FixedStepPlan(Plan):
                    e=np.zeros((1, kernels.N_E)))
 
     def chunks(self, x: np.ndarray, st: np.ndarray, fine: bool = False, extra: np.ndarray | None = None,
-               rot: int | None = None, loads: np.ndarray | None = None, levels: np.ndarray | None = None):
+               rot: int | None = None, loads: np.ndarray | None = None, levels: np.ndarray | None = None,
+               into=None):
         """Step the loop from the state (x, st) to the end, chunk by chunk: yields (first output
         step, output steps, substeps each, the chunk's load at its compute nodes, its rows (every
         compute step where ``fine``), each compute step's substep level, kernel seconds).
         ``extra`` (compute nodes, n): a load added to the scene's, ``rot`` a kinematics' code
         other than the system's, ``loads``: the scene's load at every compute node, if a run has
         built it already, ``levels`` (compute steps,): the substep level each step starts from
-        (the levels a run took: rbhyst.solve.companion)."""
+        (the levels a run took: rbhyst.solve.companion). ``into``: where the rows of every
+        compute step go (``fine``), ``into.buffers(node, rows)`` giving a chunk's arrays from
+        its first compute node on (the rows of a whole run kept without a copy: the estimate's
+        tap and companion)."""
         system, s = self.system, self.settings
         ne, n = self.bvec.shape
         # a chunk of compute-step rows holds at least one output step's substeps (a pulse far
         # shorter than dt splits one step into more rows than a chunk of a short run has)
-        buf = _Buffers(max(self.chunk, int(self.substeps.max())) if fine else self.chunk, ne, n)
+        if into is None:
+            buf = _Buffers(max(self.chunk, int(self.substeps.max())) if fine else self.chunk, ne, n)
         node = 0  # the compute node the chunk starts at
         for first, n_out, nsub in self.segments(fine):
             t_c = s.dt * (first + np.arange(n_out * nsub + 1) / nsub)
@@ -379,6 +384,9 @@ class FixedStepPlan(Plan):
                 load[:, :n] += extra[node:node + n_out * nsub + 1]
             steps = n_out * nsub
             level = np.empty(steps, dtype=np.int64) if levels is None else levels[node:node + steps].copy()
+            if into is not None:
+                assert fine, "rows kept at every compute step are fine rows"
+                buf = into.buffers(node, steps)
             node += steps
             sub = nsub if fine else 1
             info = np.zeros(kernels.INFO_SIZE)
@@ -395,8 +403,9 @@ class FixedStepPlan(Plan):
 
     def run(self, keep: bool = True, csv=None, compare_every: int | None = None, progress=None,
             tap=None) -> Result:
-        """``tap(load, raw)``, if given, sees every chunk's load at its compute nodes and rows (the
-        error estimate's companion: rbhyst.solve.companion)."""
+        """``tap(load, raw, levels)``, if given, sees every chunk's load at its compute nodes, its
+        rows (in the arrays ``tap.buffers`` gives: plan.chunks' ``into``) and the substep level
+        of each step (the error estimate's companion: rbhyst.solve.companion)."""
         system, s = self.system, self.settings
         ne, n = self.bvec.shape
         x, st = self.initial_state()
@@ -409,7 +418,7 @@ class FixedStepPlan(Plan):
         wall = 0.0
         try:
             rows.add(self.start_row(x, st))
-            for first, n_out, nsub, load, raw, levels, took in self.chunks(x, st, fine):
+            for first, n_out, nsub, load, raw, levels, took in self.chunks(x, st, fine, into=tap):
                 wall += took
                 if tap is not None:
                     tap(load, raw, levels)

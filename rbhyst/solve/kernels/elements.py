@@ -175,7 +175,10 @@ def update_elements(bvec, axial, rot, mult, params, q0, q, st, cur, kpeak, r, bq
             u = bvec[e, 0] * q[0]
             for i in range(1, n):
                 u += bvec[e, i] * q[i]
-        if rot == LOCATED:
+        if rot == LOCATED and _turns(st, cur, e, u):
+            # (called only where the element turns: the steps along a branch take the inlined
+            # update below, as every other kernel's do; a call at every step cost the companion a
+            # quarter of its time)
             f, s, g, k, a, kstart, w, ok = located_update(params, e, st, cur, u)
         else:
             f, s, g, k, a, kstart, w, ok = vrm_update(params, e, st[cur, e, U], st[cur, e, F], st[cur, e, S],
@@ -203,6 +206,15 @@ def update_elements(bvec, axial, rot, mult, params, q0, q, st, cur, kpeak, r, bq
             for i in range(n):
                 r[i] += mf * bvec[e, i]
     return True, -1, work, kgeo
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _turns(st, cur, e, u):
+    """Whether element e, which moved along its branch the step before, turns on its way to u
+    (located_update's test)."""
+    u0 = st[cur, e, U]
+    s0 = st[cur, e, S]
+    return s0 != 0.0 and (u0 - st[cur, e, UP]) * s0 > 0.0 and (u - u0) * s0 < 0.0
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)

@@ -27,23 +27,30 @@ def source_and_offset(method, a, v, t, h, mass, c, damped, k0, near, extra, offs
     step after each; c: C (any (n, n) where not ``damped``). d1, d2, w1 (n,): work space."""
     nn, n = a.shape
     for i in range(nn):
-        for j in range(n):
-            if nn < 3:
+        if nn < 3:
+            for j in range(n):
                 d1[j] = 0.0
                 d2[j] = 0.0
-            elif i == 0:
+        elif i == 0:
+            for j in range(n):
                 d1[j] = (-1.5 * a[0, j] + 2.0 * a[1, j] - 0.5 * a[2, j]) / (t[1] - t[0])
                 d2[j] = 0.0
-            elif i == nn - 1:
+        elif i == nn - 1:
+            for j in range(n):
                 d1[j] = (1.5 * a[i, j] - 2.0 * a[i - 1, j] + 0.5 * a[i - 2, j]) / (t[i] - t[i - 1])
                 d2[j] = 0.0
-            else:
-                hl = t[i] - t[i - 1]
-                hr = t[i + 1] - t[i]
-                sl = (a[i, j] - a[i - 1, j]) / hl
-                sr = (a[i + 1, j] - a[i, j]) / hr
-                d2[j] = 2.0 * (sr - sl) / (hl + hr)
-                d1[j] = (hl * sr + hr * sl) / (hl + hr)
+        else:
+            # three divisions a node, not four a coordinate (they were most of the pass)
+            hl = t[i] - t[i - 1]
+            hr = t[i + 1] - t[i]
+            ihl = 1.0 / hl
+            ihr = 1.0 / hr
+            ihs = 1.0 / (hl + hr)
+            for j in range(n):
+                sl = (a[i, j] - a[i - 1, j]) * ihl
+                sr = (a[i + 1, j] - a[i, j]) * ihr
+                d2[j] = 2.0 * (sr - sl) * ihs
+                d1[j] = (hl * sr + hr * sl) * ihs
         hh = h[i] * h[i]
         if method == CHANG:
             # w1 = M^-1 (C A + K0 V)
@@ -61,8 +68,8 @@ def source_and_offset(method, a, v, t, h, mass, c, damped, k0, near, extra, offs
                     ka += k0[j, k] * a[i, k]
                     if damped:
                         cc += c[j, k] * ((5.0 / 12.0) * d1[k] + 0.25 * w1[k])
-                extra[i, j] = hh * (d2[j] * mass[j] / 12.0 + 0.25 * ka + cc)
-                offset[i, j] = -hh * (d1[j] / 6.0 + 0.25 * w1[j])
+                extra[i, j] = hh * (d2[j] * mass[j] * (1.0 / 12.0) + 0.25 * ka + cc)
+                offset[i, j] = -hh * (d1[j] * (1.0 / 6.0) + 0.25 * w1[j])
         else:
             sign = -1.0 if method == NEWMARK else 1.0
             fm = 1.0 / 6.0 if method == NEWMARK else 1.0 / 12.0

@@ -18,13 +18,13 @@ from rbhyst.solve.kernels.layout import A, F, G, K, S, U
 def redrive(params, st0, u, f_out, first, stop):
     """Drive element rows e = first..stop-1 of ``params`` (ne, 2, 8) from their states st0[e]
     through the samples u[:, e] (equally spaced in time), a reversal's vertex inserted between
-    the samples it falls between; f_out[i, e] the force at sample i (f_out[0] is st0's). Returns
-    -1, or the sample at which an element left its calibrated range. (The elements are
-    independent: two threads may drive two ranges of one array.)"""
+    the samples it falls between; f_out[e, i] the force at sample i (f_out[e, 0] is st0's).
+    Returns -1, or the sample at which an element left its calibrated range. (The elements are
+    independent: threads may drive ranges of one array, each element's forces a row of its own.)"""
     n = u.shape[0]
     for e in range(first, stop):
         uu, f, s, g, k, a = st0[e, U], st0[e, F], st0[e, S], st0[e, G], st0[e, K], st0[e, A]
-        f_out[0, e] = f
+        f_out[e, 0] = f
         for i in range(1, n):
             # the vertex of sample i's parabola, if i turns and the vertex lies before it
             if i < n - 1:
@@ -43,7 +43,7 @@ def redrive(params, st0, u, f_out, first, stop):
             if not ok:
                 return i
             uu = u[i, e]
-            f_out[i, e] = f
+            f_out[e, i] = f
             if i < n - 1:
                 d0 = u[i, e] - u[i - 1, e]
                 d1 = u[i + 1, e] - u[i, e]
