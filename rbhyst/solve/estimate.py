@@ -123,11 +123,11 @@ def column_errors(values: np.ndarray, ref: np.ndarray, keys, families, system: S
 def relative_to_peaks(diff: np.ndarray, peak: np.ndarray, keys, families, system: System) -> np.ndarray:
     """column_errors from each column's largest difference and the reference's peak."""
     length = _to_length(keys, system)
-    families = np.asarray(families)
-    scale = np.empty(len(keys))
-    for fam in set(families.tolist()):  # (np.unique imports numpy.ma: 7 ms)
-        mine = families == fam
-        scale[mine] = np.max(peak[mine] * length[mine]) / length[mine]
+    index: dict = {}
+    family = np.array([index.setdefault(f, len(index)) for f in families], dtype=np.intp)
+    top = np.zeros(len(index))
+    np.maximum.at(top, family, peak * length)  # each family's largest peak, in its measure
+    scale = top[family] / length
     denom = np.where(peak > AT_REST * scale, np.maximum(peak, NEGLIGIBLE * scale), scale)
     with np.errstate(invalid="ignore", divide="ignore"):
         return np.where(denom > 0, diff / denom, np.where(diff > 0, np.inf, 0.0))

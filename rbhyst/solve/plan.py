@@ -49,6 +49,8 @@ def compute_times(bounds: np.ndarray, substeps: np.ndarray, dt: float) -> np.nda
     """Every compute step's end time after t = 0 where output steps bounds[i]..bounds[i + 1]
     take substeps[i] compute steps each (Excitation.substeps): the resolution at which a run
     follows its excitation, and at which its response spectra are driven."""
+    if len(substeps) == 1 and substeps[0] == 1:  # (every step whole: t_n = n dt, the common case)
+        return dt * np.arange(bounds[0] + 1, bounds[1] + 1, dtype=float)
     parts = [dt * (lo + np.arange(1, (hi - lo) * m + 1) / m)
              for lo, hi, m in zip(bounds[:-1], bounds[1:], substeps)]
     return np.concatenate(parts) if parts else np.empty(0)
@@ -333,11 +335,19 @@ class FixedStepPlan(Plan):
         (dt / substeps / 2^level, each compute step's ``levels`` as a run took them; the last
         node's the one before it), and the node of every output step."""
         s = self.settings
-        t = np.concatenate([[0.0], compute_times(self.bounds, self.substeps, s.dt)])
         lengths = np.diff(self.bounds)
-        out = np.concatenate([[0], np.cumsum(np.repeat(self.substeps, lengths))])
-        h = np.repeat(s.dt / self.substeps, lengths * self.substeps) / 2.0 ** levels
-        return t, np.append(h, h[-1:]), out
+        t = np.empty(int(np.sum(lengths * self.substeps)) + 1)
+        t[0] = 0.0
+        t[1:] = compute_times(self.bounds, self.substeps, s.dt)
+        out = np.empty(int(np.sum(lengths)) + 1, dtype=np.int64)
+        out[0] = 0
+        np.cumsum(np.repeat(self.substeps, lengths), out=out[1:])
+        h = np.empty(len(t))
+        h[:-1] = np.repeat(s.dt / self.substeps, lengths * self.substeps)
+        if levels.any():  # (h / 2^level, exactly; most runs split no step)
+            h[:-1] = np.ldexp(h[:-1], -levels)
+        h[-1] = h[-2] if len(h) > 1 else s.dt
+        return t, h, out
 
     def segments(self, fine: bool = False):
         """(first output step, steps, substeps each): runs of equal splitting, at most a chunk of
