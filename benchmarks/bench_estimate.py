@@ -6,8 +6,9 @@ For the seed deck, the median over N random scenes (tests/test_accuracy.py's gen
 1000...) and every deck of the folders given: ``accuracy.wall_s / analysis.wall_s`` (each the
 best of ``--repeat`` runs in one process, kernels loaded), the estimate's status, and the
 largest estimated error over the largest true error (the run's rows against the reference at
-rtol 1e-12, every column the estimate covers: what the tests hold within [0.5, 10]). On a
-machine shared with other work the ratios scatter: repeat.
+rtol 1e-12, every column the estimate covers: what the tests hold within [0.5, 10]). The
+process keeps freed memory as the command's does (rbhyst.allocator), so that a run's arrays are
+not fresh pages each time. On a machine shared with other work the ratios scatter: repeat.
 """
 
 from __future__ import annotations
@@ -60,6 +61,9 @@ def line(name, m) -> str:
 def main() -> None:
     sys.path.insert(0, str(ROOT / "tests"))
     import rbhyst
+    from rbhyst.allocator import keep_freed_memory
+
+    keep_freed_memory()
     from conftest import write_deck
     from test_accuracy import random_scene
 

@@ -179,70 +179,45 @@ def test_the_probe_repeats_the_run_and_moves_a_determined_history_in_proportion(
     assert np.all((1.98 < twice) & (twice < 2.02)), twice
 
 
-def test_the_redrive_shared_between_two_threads_is_the_redrive_whole():
-    """The elements' forces re-driven a few at a time by two threads (each piece its own range
-    of the elements, into one array) are the forces re-driven at once, to the bit; an element
-    driven out of its range is found in any piece."""
-    from rbhyst.model.hysteresis import parameter_set
-    from rbhyst.solve.beside import Beside, Pieces
-    from rbhyst.solve.companion import redriven
-    from conftest import TABLE3_SHEAR
+@pytest.mark.parametrize("chunk", [None, 7])
+def test_the_companion_reports_its_forces_with_every_turn_where_it_falls(chunk):
+    """The companion's rows report each element's force with its turn where it falls, before the
+    row or after it (kernels.loop, LOCATED: a row whose element turned before it is patched by
+    the next step, across a chunk's start too): the forces of the elements driven along the
+    companion's deformations with every vertex inserted (kernels.redrive, the pass the rows
+    replace where no step is split), to rounding. Chunks of 7 steps put thousands of chunk
+    starts in the seed deck; the rows a turn before them patches are some hundreds."""
+    from rbhyst.results.analysis import plan as make_plan, scene
+    from rbhyst.solve.companion import Companion, RunTap, _Rows
+    from rbhyst.solve.kernels.compiled import kernel
+    from rbhyst.solve.kernels.layout import LOCATED, x_slice
 
-    one = parameter_set(TABLE3_SHEAR["loading"], TABLE3_SHEAR["unloading"])
-    params = np.ascontiguousarray(np.repeat(one[None], 5, axis=0))
-    t = np.linspace(0.0, 4.0, 20_001)
-    u = np.ascontiguousarray(0.02 * np.sin(np.outer(2 * np.pi * 0.8 * t, 1.0 + 0.1 * np.arange(5)) + 0.3))
-    st0 = np.zeros((5, 6))
-
-    def shared(u):
-        pieces = Pieces()
-        other = Beside(pieces.work)
-        try:
-            return redriven(params, st0, u, pieces)
-        finally:
-            pieces.close()
-            other.result()
-
-    whole = redriven(params, st0, u)
-    assert whole is not None and np.array_equal(whole, shared(u))
-    assert len(np.unique(whole[:, -1])) == 5  # (five histories, not one copied)
-    for e in (1, 4):  # in the first piece, and in the last
-        far = u.copy()
-        far[-10:, e] = 1e3
-        assert redriven(params, st0, far) is None and shared(far) is None
-
-
-def test_pieces_are_each_taken_once_and_a_failure_reaches_the_caller():
-    """Pieces: every piece called once whoever takes it; a thread waiting for pieces goes on
-    when they are closed; what a piece raised is raised by finish, in the caller's thread."""
-    import threading
-
-    from rbhyst.solve.beside import Beside, Pieces
-
-    seen, lock = [], threading.Lock()
-
-    def note(k):
-        with lock:
-            seen.append(k)
-
-    pieces = Pieces()
-    other = Beside(pieces.work)
-    pieces.open(note, [(k,) for k in range(200)])
-    pieces.finish()
-    other.result()
-    assert sorted(seen) == list(range(200))
-    idle = Pieces()
-    waiting = Beside(idle.work)
-    idle.close()
-    assert waiting.result() is None
-
-    def fail(k):
-        raise ValueError(f"piece {k}")
-
-    broken = Pieces()
-    broken.open(fail, [(1,), (2,)])
-    with pytest.raises(ValueError, match="piece 1"):
-        broken.finish()
+    system, settings = scene(rbhyst.load_deck(DECKS / "seed_wri.toml"))
+    plan = make_plan(system, settings)
+    tap = RunTap(plan)
+    run = plan.run(keep=False, tap=tap)
+    companion = Companion(plan, tap, run.compare_every)
+    if chunk is not None:
+        plan.chunk = chunk
+    x, st = plan.initial_state()
+    x[x_slice(system.n, 1)] = -companion.offset[0]
+    st0 = st[0, :, :6].copy()
+    rows = _Rows(plan.start_row(x, st), len(companion.extra), keep=("u", "f"))
+    for _ in plan.chunks(x, st, fine=True, extra=companion.extra, rot=LOCATED, loads=companion.load,
+                         levels=companion.levels, into=rows):
+        pass
+    ne = plan.bvec.shape[0]
+    ref = np.empty((ne, len(rows.u)))
+    assert not companion.levels.any()
+    assert kernel("redrive")(plan.params, st0, np.ascontiguousarray(rows.u), ref, 0, ne) == -1
+    scale = np.max(np.abs(ref))
+    assert np.max(np.abs(rows.f - ref.T)) < 1e-10 * scale
+    u = rows.u
+    d0, d1 = u[1:-1] - u[:-2], u[2:] - u[1:-1]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        before = (d0 * d1 < 0) & (0.5 * (u[:-2] - u[2:]) / (d1 - d0) < 0)  # the vertex before the row
+    assert before.sum() > 100
+    assert np.all(np.abs(rows.f[1:-1][before] - ref.T[1:-1][before]) < 1e-10 * scale)
 
 
 def test_the_check_on_a_core_of_its_own_gives_the_same_estimate(monkeypatch):

@@ -21,8 +21,11 @@ One part of the error is not in S: the loop starts an element's new branch at th
 its deformation turned, not at the turn (seed eq. 14), O(h^2) off; the force carries that along
 the branch, and the motion the drift it leaves (a body that creeps under cyclic load). The
 companion therefore steps with every turn put within its step (kernels.layout.LOCATED: the
-vertex of the parabola through the element's last three deformations), and its forces at the
-rows are re-driven by the same rule (rbhyst.solve.kernels.redrive); its resultant,
+vertex of the parabola through the element's last three deformations), and its rows report
+the forces with each turn where it falls: a row whose element turned before it (found by the
+next step) takes its force on the new branch (kernels.loop, LOCATED), or where the run split a
+step into substeps the forces are re-driven between the rows by the same rule
+(rbhyst.solve.kernels.redrive); its resultant,
 accelerations and points follow from them by the equation of motion, as every row's do
 (history.Layout).
 
@@ -30,7 +33,7 @@ Measured against the event-located adaptive solution at rtol 1e-12 (tests/test_a
 tests/test_companion.py): every column of the seed deck within 0.93-1.12 of its true error; of 24
 random scenes with the three methods (71 of 72 runs) 97.9 % of 1,173 columns within [0.5, 2]
 (0.47-4.2, the widest on short pulses and on stiffening elements). The companion costs one more
-time stepping and one pass of the elements. Steps the run's stiffness monitor split into substeps are split alike in the companion, its
+time stepping (and one pass of the elements where the run split a step). Steps the run's stiffness monitor split into substeps are split alike in the companion, its
 source taken at the substeps' h (kernels.loop: ``levels``; its own monitor does not judge again:
 its states are the run's within the run's error, and a step split otherwise would carry another
 error than the one its source takes out). Where it does not apply (exact kinematics, KR-alpha,
@@ -133,6 +136,9 @@ class _Rows:
         self._spare = {}
 
     def buffers(self, node: int, rows: int):
+        """The arrays the loop writes a chunk's rows into, from compute node ``node`` + 1 on, and
+        ``fb``, the row of forces before them (the loop patches a turn the chunk's first step
+        put before it: kernels.loop's out_fb)."""
         from types import SimpleNamespace
 
         out = {}
@@ -144,6 +150,7 @@ class _Rows:
                 if spare is None or len(spare) < rows:
                     spare = self._spare[k] = np.empty((rows, width))
                 out[k] = spare[:rows]
+        out["fb"] = self.f[node] if "f" in self._keep else np.empty(self._widths["f"])
         return SimpleNamespace(**out)
 
 
@@ -170,25 +177,20 @@ class Companion:
         self.f = tap.f[self.take]
         self.load = tap.load
 
-    def run(self, pieces=None):
+    def run(self):
         """(dd, dv, df): the run's coordinates, velocities and element forces less the companion's
         at the compared steps (history.Layout.largest_change makes every column's of them), and
-        the companion's kernel seconds; None where an element's re-driven force left its range or
-        Newton's iterations split a step further than the run's. ``pieces`` (beside.Pieces): the
-        elements' forces re-driven a few at a time, shared with another thread; closed here
-        whatever happens."""
-        try:
-            return self._run(pieces)
-        finally:
-            if pieces is not None:
-                pieces.close()
-
-    def _run(self, pieces):
+        the companion's kernel seconds; None where Newton's iterations split a step further than
+        the run's or a re-driven force left its element's range. The companion's forces are
+        those of its elements driven with every turn put where it falls, before or after the
+        node: its rows' (kernels.loop, LOCATED), or re-driven between them where the run split
+        a step (``redriven``)."""
         plan = self.plan
         x, st = plan.initial_state()
         x[x_slice(plan.system.n, 1)] = -self.offset[0]
         st0 = st[0].copy()  # (the loop steps st in place)
-        keep = _Rows(plan.start_row(x, st), len(self.extra), keep=("d", "v", "u"))
+        split = bool(self.levels.any())  # (then the forces are re-driven between the rows)
+        keep = _Rows(plan.start_row(x, st), len(self.extra), keep=("d", "v", "u" if split else "f"))
         wall = 0.0
         # every turn put where it falls within its step (LOCATED): the companion's motion then
         # carries none of the run's O(h^2) branch origins, whose drift (a body that creeps under
@@ -200,11 +202,11 @@ class Companion:
             if not self._stepped_as_run(levels, node):
                 return None, wall
             node += len(levels)
-        f = redriven(plan.params, st0, keep.u, pieces)
+        f = keep.f if not split else redriven(plan.params, st0, keep.u)
         if f is None:
             return None, wall
         rows = self.take
-        return (self.d - keep.d[rows], self.v - keep.v[rows], self.f - f.T[rows]), wall
+        return (self.d - keep.d[rows], self.v - keep.v[rows], self.f - f[rows]), wall
 
     def probe(self, eps: float):
         """(dd, dv, df): how far the run moves (its coordinates, velocities and element forces at
@@ -238,32 +240,15 @@ class Companion:
         return np.array_equal(levels, self.levels[node:node + len(levels)])
 
 
-#: the elements re-driven a piece at a time where two threads share the work (rbhyst.solve.beside.Pieces)
-ELEMENTS_A_PIECE = 1
-
-
-def redriven(params: np.ndarray, st0: np.ndarray, u: np.ndarray, pieces=None) -> np.ndarray | None:
-    """(ne, samples) every element's force driven from its state st0 along its deformations u
+def redriven(params: np.ndarray, st0: np.ndarray, u: np.ndarray) -> np.ndarray | None:
+    """(samples, ne) every element's force driven from its state st0 along its deformations u
     (samples, ne), each reversal located within its step (kernels.redrive), or None where one
-    left its range; with ``pieces`` (a beside.Pieces another thread also works on) a few
-    elements at a time, by whichever thread is free."""
+    left its range."""
     from rbhyst.solve.kernels.compiled import kernel
 
     ne = u.shape[1]
     f = np.empty((ne, u.shape[0]))
-    bad = []
-    drive = kernel("redrive")
-
-    def piece(first, stop):
-        if drive(params, st0, u, f, first, stop) >= 0:
-            bad.append(first)
-
-    if pieces is None:
-        piece(0, ne)
-    else:
-        pieces.open(piece, [(e, min(e + ELEMENTS_A_PIECE, ne)) for e in range(0, ne, ELEMENTS_A_PIECE)])
-        pieces.finish()
-    return None if bad else f
+    return None if kernel("redrive")(params, st0, u, f, 0, ne) >= 0 else f.T
 
 
 def source_and_offset(method: str, a: np.ndarray, v: np.ndarray, t: np.ndarray, h: np.ndarray,

@@ -301,9 +301,9 @@ def _from_companion(result, settings, plan, tap, spare_core: bool = False) -> di
     run's converged, an element out of its range, an estimate past COMPANION_LARGEST, a history
     the check finds undetermined. With ``spare_core`` the check (the probe) runs on a thread of
     its own beside the companion, before it is known to be needed (the kernels hold no lock of
-    Python's), then takes its share of the companion's re-drive: the seed deck's estimate 24 ->
-    12 ms; the check's result is dropped where it is not needed."""
-    from rbhyst.solve.beside import Beside, Pieces
+    Python's): the seed deck's estimate 24 -> 11 ms with the rest of the companion's making; the
+    check's result is dropped where it is not needed."""
+    from rbhyst.solve.beside import Beside
     from rbhyst.solve.companion import Companion
 
     stats = result.stats
@@ -320,30 +320,20 @@ def _from_companion(result, settings, plan, tap, spare_core: bool = False) -> di
         moved, took = companion.probe(COMPANION_PROBE)
         return (None if moved is None else change(*moved)), took
 
-    def run_peaks():
-        return largest_abs(result.compared[:, 1:])
-
-    def beside_companion():
-        """The companion's check's thread: the probe's stepping, then its share of the
-        companion's re-drive (on the estimate's path), then the probe's comparison and the run's
-        peaks (not on it)."""
-        moved, took = companion.probe(COMPANION_PROBE)
-        pieces.work()
-        return (None if moved is None else change(*moved)), took, run_peaks()
-
     beside = spare_core and stats.steps_taken * plan.bvec.shape[0] >= BESIDE_MIN_WORK
-    pieces = Pieces() if beside else None
-    ahead = Beside(beside_companion, name="rbhyst companion's check") if beside else None
+    ahead = Beside(probe, name="rbhyst companion's check") if beside else None
     try:
-        diff, wall = companion.run(pieces)
+        diff, wall = companion.run()
         changed = None if diff is None else change(*diff)
     finally:
         checked = ahead.result() if ahead is not None else None  # (never left running)
     if diff is None:
         return None
-    # every column against the run's peaks (the companion's are the same to within the error: a
-    # second-order change of a relative error)
-    peaks = checked[2] if checked is not None else run_peaks()
+    # every column against the run's peaks over every step (its extremes: the compared rows' where
+    # it compares every step; the companion's are the same to within the error, a second-order
+    # change of a relative error)
+    extremes, columns = result.extremes, [c for _, c, _ in cols]
+    peaks = np.maximum(np.abs(extremes.max[columns]), np.abs(extremes.min[columns]))
     err = relative_to_peaks(changed, peaks, keys, families, result.system)
     info = {"steps": int(stats.steps_taken), "wall_s": wall}
     if max(err, default=0.0) > COMPANION_LARGEST:
@@ -352,7 +342,7 @@ def _from_companion(result, settings, plan, tap, spare_core: bool = False) -> di
         # near the warning: is the history determined? The run again, COMPANION_PROBE of the
         # companion's source added: a determined history moves by that fraction of the error, a
         # sensitive one as much as the run itself (then the adaptive solutions say how much)
-        moved, took = checked[:2] if checked is not None else probe()
+        moved, took = checked if checked is not None else probe()
         if moved is None:
             return None
         spread = relative_to_peaks(moved, peaks, keys, families, result.system)

@@ -328,7 +328,7 @@ class FixedStepPlan(Plan):
                                         t0, h_c, rows_every, n, s.max_omega_dt, self.level0[nsub], s.max_substep_level,
                                         s.newton_tol, s.newton_max_iter, x, st, np.zeros((ne, N_STATE)), np.zeros((ne, 2)),
                                         np.zeros((ne, n_q)), np.zeros((N_W, n_q)), np.zeros((n_q, n_q)), buf.d, buf.v, buf.u, buf.f, buf.e,
-                                        levels, force, info)
+                                        buf.fb, levels, force, info)
 
     def compute_nodes(self, levels: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(t, h, out): every compute node's time from 0, the step the loop takes after it
@@ -460,6 +460,7 @@ class _Buffers:
         self.u = np.empty((rows, ne))
         self.f = np.empty((rows, ne))
         self.e = np.empty((rows, kernels.N_E))
+        self.fb = np.empty(ne)  # (the row before the chunk's: kept by none of these)
 
 
 def run_spectra(system: System, s: Settings, body):

@@ -8,7 +8,8 @@
   :mod:`rbhyst.solve.integrators`;
 - :mod:`.dop853`: the adaptive integration; :mod:`.csvfmt`: CSV text; :mod:`.reduce`: peaks;
 - :mod:`.modified`, :mod:`.redrive`: the error estimate's companion (its load from the
-  method's modified equation; its forces with every reversal located);
+  method's modified equation; its forces with every reversal located, where the loop split
+  a step: elsewhere the loop's rows report them, :mod:`.elements` ``LOCATED``);
 - :mod:`.compiled`: the kernels built ahead of time at install, or numba's JIT.
 
 Everything here is called through :mod:`rbhyst.solve.plan` and :mod:`rbhyst.solve.companion`.

@@ -10,7 +10,7 @@ import math
 from numba import njit
 
 from rbhyst.model.vrm import vrm_update
-from rbhyst.solve.kernels.layout import A, F, G, K, LOCATED, S, SPATIAL, U, UP
+from rbhyst.solve.kernels.layout import A, F, FB, G, K, LOCATED, S, SPATIAL, U, UP
 from rbhyst.solve.kernels.rotations import element_row, rotation, turned
 
 
@@ -175,11 +175,11 @@ def update_elements(bvec, axial, rot, mult, params, q0, q, st, cur, kpeak, r, bq
             u = bvec[e, 0] * q[0]
             for i in range(1, n):
                 u += bvec[e, i] * q[i]
+        back = math.nan
         if rot == LOCATED and _turns(st, cur, e, u):
-            # (called only where the element turns: the steps along a branch take the inlined
-            # update below, as every other kernel's do; a call at every step cost the companion a
-            # quarter of its time)
-            f, s, g, k, a, kstart, w, ok = located_update(params, e, st, cur, u)
+            # (a call only where it turns: along a branch the inlined update below; a call at
+            # every step cost the companion a quarter of its time)
+            f, s, g, k, a, kstart, w, ok, back = located_update(params, e, st, cur, u)
         else:
             f, s, g, k, a, kstart, w, ok = vrm_update(params, e, st[cur, e, U], st[cur, e, F], st[cur, e, S],
                                                       st[cur, e, G], st[cur, e, K], st[cur, e, A], u)
@@ -193,6 +193,7 @@ def update_elements(bvec, axial, rot, mult, params, q0, q, st, cur, kpeak, r, bq
         st[nxt, e, G] = g
         st[nxt, e, K] = k
         st[nxt, e, A] = a
+        st[nxt, e, FB] = back
         kpeak[e, 0] = max(kstart, k)
         kpeak[e, 1] = k
         m = mult[e]
@@ -223,22 +224,27 @@ def located_update(params, e, st, cur, u):
     this one turns: to the turn first, the vertex of the parabola through the deformations a
     step before, now and at u (O(h^3) from the true turn where the node is O(h^2)), then on the
     new branch to u. Returns as vrm_update (the work of both parts; the tangent at the start of
-    the new branch)."""
+    the new branch), and where the vertex lies before the node the step started from, that
+    node's force on the new branch (the turn put before it: what the node's row reports), else
+    NaN (its row's force stands, the turn after it)."""
     u0 = st[cur, e, U]
     s0 = st[cur, e, S]
     d0 = u0 - st[cur, e, UP]
     d1 = u - u0
-    if s0 != 0.0 and d0 * s0 > 0.0 and d1 * s0 < 0.0:
-        c = st[cur, e, UP] - u
-        x = 0.5 * c / (d1 - d0)
-        peak = u0 - 0.25 * c * x
-        f, s, g, k, a, _, w, ok = vrm_update(params, e, u0, st[cur, e, F], s0, st[cur, e, G], st[cur, e, K],
-                                             st[cur, e, A], peak)
-        if not ok:
-            return f, s, g, k, a, k, w, ok
-        f, s, g, k, a, kstart, w2, ok = vrm_update(params, e, peak, f, s, g, k, a, u)
-        return f, s, g, k, a, kstart, w + w2, ok
-    return vrm_update(params, e, u0, st[cur, e, F], s0, st[cur, e, G], st[cur, e, K], st[cur, e, A], u)
+    c = st[cur, e, UP] - u
+    x = 0.5 * c / (d1 - d0)  # the vertex's time after the node, in steps (|x| <= 1/2)
+    peak = u0 - 0.25 * c * x
+    f, s, g, k, a, _, w, ok = vrm_update(params, e, u0, st[cur, e, F], s0, st[cur, e, G], st[cur, e, K],
+                                         st[cur, e, A], peak)
+    if not ok:
+        return f, s, g, k, a, k, w, ok, math.nan
+    back = math.nan
+    if x < 0.0:
+        back, _, _, _, _, _, _, fine = vrm_update(params, e, peak, f, s, g, k, a, u0)
+        if not fine:
+            back = math.nan
+    f, s, g, k, a, kstart, w2, ok = vrm_update(params, e, peak, f, s, g, k, a, u)
+    return f, s, g, k, a, kstart, w + w2, ok, back
 
 
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)

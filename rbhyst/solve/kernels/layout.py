@@ -27,8 +27,10 @@ LOCATED = -3
 MODIFIED = {"newmark": 0, "central-difference": 1, "chang": 2}
 
 # element state columns: displacement, force, branch sign, gap, tangent, antiderivative
-U, F, S, G, K, A, UP = range(7)  # UP: the deformation a step before (LOCATED)
-N_STATE = 7
+U, F, S, G, K, A, UP, FB = range(8)  # UP: the deformation a step before (LOCATED)
+#: FB (LOCATED): where the step turned the element before the node it started from, that node's
+#: force re-driven on the new branch (the turn put before the node, not after it); else NaN
+N_STATE = 8
 
 # info: how a chunk ended
 I_STATUS, I_ELEMENT, I_TIME, I_STIFFNESS, I_OMEGA, I_DISP, I_BRANCH = range(7)

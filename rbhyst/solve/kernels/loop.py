@@ -19,7 +19,7 @@ import math
 from numba import njit
 
 from rbhyst.solve.integrators.steps import take_step
-from rbhyst.solve.kernels.layout import (E_HYST, E_IN, E_KIN, E_VISC, F, I_BRANCH, I_DISP, I_ELEMENT, I_OMEGA, I_STATUS, I_STIFFNESS, I_TIME, NEWTON_FAILED, NONFINITE, NOT_CONVERGED, OK, OVERFLOW, S, SPATIAL, U, UNRESOLVED, W_A, W_AN, W_D, W_DN, W_PA, W_PB, W_Q, W_SA, W_SD, W_SV, W_V, W_VN, W_X, W_Z, X_CUR, X_E_HYST, X_E_IN, X_E_VISC, X_ITER, X_LEVEL, X_LEVEL_USED, X_OMEGA_DT2, X_Q, X_STEPS, X_SUBSTEPS)
+from rbhyst.solve.kernels.layout import (E_HYST, E_IN, E_KIN, E_VISC, F, FB, I_BRANCH, I_DISP, I_ELEMENT, I_OMEGA, I_STATUS, I_STIFFNESS, I_TIME, LOCATED, NEWTON_FAILED, NONFINITE, NOT_CONVERGED, OK, OVERFLOW, S, SPATIAL, U, UNRESOLVED, W_A, W_AN, W_D, W_DN, W_PA, W_PB, W_Q, W_SA, W_SD, W_SV, W_V, W_VN, W_X, W_Z, X_CUR, X_E_HYST, X_E_IN, X_E_VISC, X_ITER, X_LEVEL, X_LEVEL_USED, X_OMEGA_DT2, X_Q, X_STEPS, X_SUBSTEPS)
 from rbhyst.solve.kernels.elements import (copy_rows, copy_vector, omega_squared, omega_squared_exact, row_dot,
                                            turned_dampers)
 from rbhyst.solve.kernels.rotations import compose
@@ -35,7 +35,7 @@ def _fail(info, status, element, t):
 @njit(cache=True, error_model="numpy", _nrt=False)
 def run_chunk(method, coef, mass, minv, cm, damped, bvec, axial, rot, mult, params, wgt,
               load, t0, h_c, nsub_c, n_steps, omega_dt_limit, min_level, max_level, newton_tol, newton_max_iter,
-              x, st, st_save, kpeak, bq, w, wm, out_d, out_v, out_u, out_f, out_e, levels, force, info):
+              x, st, st_save, kpeak, bq, w, wm, out_d, out_v, out_u, out_f, out_e, out_fb, levels, force, info):
     """Advance the state x, st over n_steps output steps of nsub_c compute steps of h_c each.
 
     mass, minv: the diagonals of M and M^-1 as tuples of n (n is their length). wgt (ne,): each
@@ -53,6 +53,10 @@ def run_chunk(method, coef, mass, minv, cm, damped, bvec, axial, rot, mult, para
     substeps); with ``force`` each step takes the level it holds, the stiffness monitor's
     judgement aside (a companion run steps as its run stepped, within its error of the run's
     states: rbhyst.solve.companion; only Newton's failure still splits a step further).
+    With rot = LOCATED (the companion) and a row at every compute step, a row whose element
+    turned before it (the turn's vertex found by the next step) takes the force re-driven on the
+    new branch (elements.located_update), the row before the chunk's first into out_fb (ne,)
+    (NaN where it stands): the forces the companion reports, each turn where it falls.
     Rows hold no acceleration: the caller takes it from the equation of motion at the row's
     state and time (rbhyst.solve.history.Layout), never from a method's own variable (KR-alpha's
     is a(t) + O(h); any method's carries the load averaged over a step near a jump).
@@ -197,6 +201,15 @@ def run_chunk(method, coef, mass, minv, cm, damped, bvec, axial, rot, mult, para
             for e in range(ne):
                 out_u[row, e] = st[cur, e, U]
                 out_f[row, e] = st[cur, e, F]
+            if rot == LOCATED and nsub_c == 1 and level == 0:
+                # (a step split into substeps located its turns between them, not at the rows)
+                for e in range(ne):
+                    back = st[cur, e, FB]
+                    if not math.isnan(back):
+                        if row > 0:
+                            out_f[row - 1, e] = back
+                        else:
+                            out_fb[e] = back
             out_e[row, E_IN] = e_in
             kinetic = mass[0] * v[0] * v[0]
             for i in range(1, n):

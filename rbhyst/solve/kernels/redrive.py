@@ -5,7 +5,12 @@ turned (seed eq. 14 with t_P at that node), not at the turn itself: the branch's
 by O(h^2) and so is every force along the branch until its memory fades. The error estimate
 (rbhyst.solve.companion) re-drives each element along its companion's deformation with the
 turn put where it is, the vertex of the parabola through the three samples around it, so that
-the companion's forces carry none of that error and the difference shows the run's.
+the companion's forces carry none of that error and the difference shows the run's. Where no
+step was split into substeps the companion's own rows report these forces (kernels.loop,
+LOCATED: the same updates, to rounding) and this pass is not needed; in a split step the
+loop puts a turn between substeps, with a step before of another length, and this pass,
+between the compute nodes, is the one measured against the adaptive solution (a 20 g shock:
+0.96 of the true error against 0.23).
 """
 
 from numba import njit
