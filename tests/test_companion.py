@@ -149,6 +149,26 @@ def test_forces_re_driven_with_the_reversal_located(tmp_path):
     assert err_located < 0.05 * err_plain, (err_located, err_plain)
 
 
+@pytest.mark.parametrize("every", [1, 3, 7])
+def test_the_probe_takes_the_compared_rows_of_every_chunk(tmp_path, every):
+    """On a grid without substeps the probe finds each chunk's compared rows by arithmetic: with
+    eps = 0 it is the run at every compared step, bit for bit, over chunks of 7 steps whose rows
+    every 3rd or 7th step fall anywhere in them."""
+    from rbhyst.results.analysis import _companion, plan, scene
+    from rbhyst.solve.companion import Companion
+
+    system, settings = scene(rbhyst.load_deck(write_deck(tmp_path, seed_deck(duration=0.5))))
+    planned = plan(system, settings)
+    run, tap = _companion(planned)
+    run.run(keep=False, tap=tap)
+    companion = Companion(planned, tap, every)
+    assert isinstance(companion.take, slice)
+    planned.chunk = 7
+    moved, _ = companion.probe(0.0)
+    assert len(moved[0]) == len(range(0, len(tap.d), every))
+    assert all(np.all(m == 0.0) for m in moved)
+
+
 def test_the_probe_repeats_the_run_and_moves_a_determined_history_in_proportion(tmp_path):
     """The check near the warning is the run again with eps times the companion's source: with eps
     = 0 it is the run bit for bit at the compared steps (a shock that splits steps into substeps,

@@ -221,13 +221,18 @@ class Companion:
         d, v, f = np.empty_like(self.d), np.empty_like(self.v_run), np.empty_like(self.f)
         d[0], v[0], f[0] = x[x_slice(n, 0)], x[x_slice(n, 1)], st[0, :, F]
         wall, node, k = 0.0, 0, 1  # node: the compute node before the chunk's first row; k: the next row
+        every = self.take if isinstance(self.take, slice) else None
         for _, _, _, _, raw, levels, took in plan.chunks(x, st, fine=True, extra=eps * self.extra,
                                                          loads=self.load, levels=self.levels):
             wall += took
             if not self._stepped_as_run(levels, node):
                 return None, wall
             m = len(raw.t)
-            mine = _evenly(rows[k:np.searchsorted(rows, node + m, side="right")] - (node + 1))
+            if every is not None:  # (the compared nodes evenly spaced: the chunk's by arithmetic)
+                first = -(-(node + 1 - every.start) // every.step) * every.step + every.start
+                mine = slice(first - (node + 1), min(node + m, every.stop - 1) + 1 - (node + 1), every.step)
+            else:
+                mine = _evenly(rows[k:np.searchsorted(rows, node + m, side="right")] - (node + 1))
             part = raw.d[mine]
             j = k + len(part)
             d[k:j], v[k:j], f[k:j] = part, raw.v[mine], raw.f[mine]

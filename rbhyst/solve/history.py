@@ -413,7 +413,15 @@ def estimate_columns(layout: Layout) -> list[tuple[str, int, str]]:
     """(key, column, family) of every column whose error a run's estimate gives: G's motion and
     total acceleration, the mounts' resultant, each element's force and each point's motion.
     The key is the CSV column without its unit (``at1``, ``R3``, ``e3_f``, ``top_at2``); the
-    family groups the columns whose scale is shared where one of them is at rest."""
+    family groups the columns whose scale is shared where one of them is at rest. Worked out
+    once per layout (a run asks for them some five times)."""
+    known = layout.__dict__.get("_estimate_columns")
+    if known is None:
+        known = layout.__dict__["_estimate_columns"] = _estimate_columns(layout)
+    return list(known)
+
+
+def _estimate_columns(layout: Layout) -> tuple[tuple[str, int, str], ...]:
     index = {name: i for i, name in enumerate(layout.names)}
     out = [(c.key(fam), index[c.column(fam)], fam) for fam in ("d", "at", "R") for c in layout.coordinates]
     moving = [layout.coordinates[i] for i in translations(layout.coordinates)]
@@ -422,4 +430,4 @@ def estimate_columns(layout: Layout) -> list[tuple[str, int, str]]:
                 for fam in ("d", "at") for c in moving]
     n_el = layout.system.n_output_elements
     out += [(f"e{k}_f", index[f"e{k}_f_N"], "ef") for k in range(1, n_el + 1)]
-    return out
+    return tuple(out)
