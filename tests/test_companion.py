@@ -208,7 +208,7 @@ def test_the_companion_reports_its_forces_with_every_turn_where_it_falls(chunk):
     replace where no step is split), to rounding. Chunks of 7 steps put thousands of chunk
     starts in the seed deck; the rows a turn before them patches are some hundreds."""
     from rbhyst.results.analysis import plan as make_plan, scene
-    from rbhyst.solve.companion import Companion, RunTap, _Rows
+    from rbhyst.solve.companion import Companion, RunTap, KeptRows
     from rbhyst.solve.kernels.compiled import kernel
     from rbhyst.solve.kernels.layout import LOCATED, x_slice
 
@@ -222,7 +222,7 @@ def test_the_companion_reports_its_forces_with_every_turn_where_it_falls(chunk):
     x, st = plan.initial_state()
     x[x_slice(system.n, 1)] = -companion.offset[0]
     st0 = st[0, :, :6].copy()
-    rows = _Rows(plan.start_row(x, st), len(companion.extra), keep=("u", "f"))
+    rows = KeptRows(plan.start_row(x, st), len(companion.extra), keep=("u", "f"))
     for _ in plan.chunks(x, st, fine=True, extra=companion.extra, rot=LOCATED, loads=companion.load,
                          levels=companion.levels, into=rows):
         pass

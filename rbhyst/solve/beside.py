@@ -29,4 +29,3 @@ class Beside:
         if self._err is not None:
             raise self._err
         return self._out
-

@@ -92,7 +92,7 @@ class RunTap:
         x, st = plan.initial_state()
         start = plan.start_row(x, st)
         self.a = np.empty((nodes, n))
-        self._rows = _Rows(start, nodes)  # d, v, f at every node; u and e a chunk's at a time
+        self._rows = KeptRows(start, nodes)  # d, v, f at every node; u and e a chunk's at a time
         self.a[0] = x[x_slice(n, 2)]
         self.d, self.v, self.f = self._rows.d, self._rows.v, self._rows.f
         self.load = None  # the scene's load at every compute node (the companion's, less its source)
@@ -107,7 +107,7 @@ class RunTap:
         tic = time.perf_counter()
         n = len(self.minv)
         k, m = self.next, len(raw.t)
-        assert np.shares_memory(raw.d, self.d[k:k + m]), "the rows are written into the tap's arrays"
+        assert np.may_share_memory(raw.d, self.d[k:k + m]), "the rows are written into the tap's arrays"
         if self.load is None:
             self.load = np.empty((len(self.a), load.shape[1]))
             self.load[0] = load[0]
@@ -121,7 +121,7 @@ class RunTap:
         self.wall_s += time.perf_counter() - tic
 
 
-class _Rows:
+class KeptRows:
     """Rows of every compute node from the start row on, which the loop writes into (plan.chunks'
     ``into``): those of ``keep`` (d, v, u, f) in arrays of them all, the others a chunk's at a
     time."""
@@ -190,7 +190,7 @@ class Companion:
         x[x_slice(plan.system.n, 1)] = -self.offset[0]
         st0 = st[0].copy()  # (the loop steps st in place)
         split = bool(self.levels.any())  # (then the forces are re-driven between the rows)
-        keep = _Rows(plan.start_row(x, st), len(self.extra), keep=("d", "v", "u" if split else "f"))
+        keep = KeptRows(plan.start_row(x, st), len(self.extra), keep=("d", "v", "u" if split else "f"))
         wall = 0.0
         # every turn put where it falls within its step (LOCATED): the companion's motion then
         # carries none of the run's O(h^2) branch origins, whose drift (a body that creeps under

@@ -55,8 +55,9 @@ def run_chunk(method, coef, mass, minv, cm, damped, bvec, axial, rot, mult, para
     states: rbhyst.solve.companion; only Newton's failure still splits a step further).
     With rot = LOCATED (the companion) and a row at every compute step, a row whose element
     turned before it (the turn's vertex found by the next step) takes the force re-driven on the
-    new branch (elements.located_update), the row before the chunk's first into out_fb (ne,)
-    (NaN where it stands): the forces the companion reports, each turn where it falls.
+    new branch (elements.located_update), and out_fb (ne,), the forces of the row before the
+    chunk's first, alike (left as they are where they stand): the forces the companion reports,
+    each turn where it falls.
     Rows hold no acceleration: the caller takes it from the equation of motion at the row's
     state and time (rbhyst.solve.history.Layout), never from a method's own variable (KR-alpha's
     is a(t) + O(h); any method's carries the load averaged over a step near a jump).
