@@ -251,9 +251,8 @@ def redriven(params: np.ndarray, st0: np.ndarray, u: np.ndarray) -> np.ndarray |
     left its range."""
     from rbhyst.solve.kernels.compiled import kernel
 
-    ne = u.shape[1]
-    f = np.empty((ne, u.shape[0]))
-    return None if kernel("redrive")(params, st0, u, f, 0, ne) >= 0 else f.T
+    f = np.empty_like(u)
+    return None if kernel("redrive")(params, st0, u, f) >= 0 else f
 
 
 def source_and_offset(method: str, a: np.ndarray, v: np.ndarray, t: np.ndarray, h: np.ndarray,

@@ -46,7 +46,7 @@ EXPORTS = {
     "decompose": ("rbhyst.solve.kernels.csvfmt", "_decompose",
                   "i8(f8[:,::1], i8[:,::1], i8[:,::1], i1[:,::1], f8[::1])"),
     "render": ("rbhyst.solve.kernels.csvfmt", "_render", "i8(f8[:,::1], i8[:,::1], i8[:,::1], i1[:,::1], u1[::1], i8[::1])"),
-    "redrive": ("rbhyst.solve.kernels.redrive", "redrive", "i8(f8[:,:,::1], f8[:,::1], f8[:,::1], f8[:,::1], i8, i8)"),
+    "redrive": ("rbhyst.solve.kernels.redrive", "redrive", "i8(f8[:,:,::1], f8[:,::1], f8[:,::1], f8[:,::1])"),
     "modified": ("rbhyst.solve.kernels.modified", "source_and_offset",
                  "void(i8, f8[:,::1], f8[:,::1], f8[::1], f8[::1], f8[::1], f8[:,::1], b1, f8[:,::1], b1[::1], "
                  "f8[:,::1], f8[:,::1], f8[::1], f8[::1], f8[::1])"),

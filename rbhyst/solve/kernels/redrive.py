@@ -20,16 +20,15 @@ from rbhyst.solve.kernels.layout import A, F, G, K, S, U
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
-def redrive(params, st0, u, f_out, first, stop):
-    """Drive element rows e = first..stop-1 of ``params`` (ne, 2, 8) from their states st0[e]
-    through the samples u[:, e] (equally spaced in time), a reversal's vertex inserted between
-    the samples it falls between; f_out[e, i] the force at sample i (f_out[e, 0] is st0's).
-    Returns -1, or the sample at which an element left its calibrated range. (The elements are
-    independent: threads may drive ranges of one array, each element's forces a row of its own.)"""
+def redrive(params, st0, u, f_out):
+    """Drive element row e of ``params`` (ne, 2, 8) from its state st0[e] through the samples
+    u[:, e] (equally spaced in time), a reversal's vertex inserted between the samples it falls
+    between; f_out[i, e] the force at sample i (f_out[0] is st0's). Returns -1, or the sample at
+    which an element left its calibrated range."""
     n = u.shape[0]
-    for e in range(first, stop):
+    for e in range(u.shape[1]):
         uu, f, s, g, k, a = st0[e, U], st0[e, F], st0[e, S], st0[e, G], st0[e, K], st0[e, A]
-        f_out[e, 0] = f
+        f_out[0, e] = f
         for i in range(1, n):
             # the vertex of sample i's parabola, if i turns and the vertex lies before it
             if i < n - 1:
@@ -48,7 +47,7 @@ def redrive(params, st0, u, f_out, first, stop):
             if not ok:
                 return i
             uu = u[i, e]
-            f_out[e, i] = f
+            f_out[i, e] = f
             if i < n - 1:
                 d0 = u[i, e] - u[i - 1, e]
                 d1 = u[i + 1, e] - u[i, e]
