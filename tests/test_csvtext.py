@@ -37,17 +37,21 @@ def test_every_length_of_digits_at_every_place_of_the_point():
     assert format_rows(table).decode() == expected
 
 
-def test_a_file_streamed_chunk_by_chunk_is_the_table_s_text(tmp_path):
-    """CsvWriter formats and writes the chunks in threads while the caller goes on (two chunks
-    formatted at once, written in turn): chunks of any size and stride, in order, however
-    many wait; called again, the file starts over (tolerance mode's ladder runs again into the
-    same file)."""
+@pytest.mark.parametrize("piece_rows", [None, 1, 7, 700])
+def test_a_file_streamed_chunk_by_chunk_is_the_table_s_text(tmp_path, piece_rows):
+    """CsvWriter formats and writes the chunks in threads while the caller goes on (a chunk's
+    pieces formatted two at once, written in turn): chunks of any size and stride, cut into
+    pieces of any size (one row; an odd or even number of them; pieces larger than a chunk),
+    in order, however many wait; called again, the file starts over (tolerance mode's ladder
+    runs again into the same file)."""
     from rbhyst.results.writers import CsvWriter
 
     rng = np.random.default_rng(3)
     table = rng.standard_normal((9000, 5)) * 10.0 ** rng.integers(-8, 8, (9000, 5))
     path = tmp_path / "t.csv"
     w = CsvWriter(path)
+    if piece_rows is not None:
+        w.PIECE_VALUES = piece_rows * table.shape[1]
     w(("a", "b"))  # a first run that is started over
     w.add(table[:10, :2])
     w.close()

@@ -30,13 +30,19 @@ class CsvWriter:
     than the loop that makes the rows, and one thread held a long run's loop back (10^6 steps,
     540 MB: 3.0-3.2 -> 2.2 s in the process). At most IN_FLIGHT chunks wait their turn (a run
     faster than its disk waits for it: memory stays bounded); a chunk must not change once
-    added (a run's tables are new for every chunk). ``close()`` leaves the file to close after
+    added (a run's tables are new for every chunk). A chunk is cut into pieces of about
+    PIECE_VALUES values, each a lane's turn: a run's chunks are of any size (the seed deck's
+    40,001 rows came as 33,333 and 6,668), and one large chunk in one lane left the other core
+    idle while it was formatted (60-90 ms, then 20-25 ms in pieces), its text buffer faulted in
+    afresh at every run. ``close()`` leaves the file to close after
     its last write; ``wait()`` returns once it has, and raises what a write raised. Whoever
     gave the run a CsvWriter waits for it before the folder is put in place or removed.
     """
 
     #: chunks handed to the threads and not yet written
     IN_FLIGHT = 2
+    #: values formatted in one lane's turn (a few MB of text, the lane's buffer kept from turn to turn)
+    PIECE_VALUES = 131_072
 
     def __init__(self, path: Path):
         self.path = Path(path)
@@ -49,9 +55,9 @@ class CsvWriter:
         from rbhyst.results.csvtext import RowsText
 
         self.wait()
-        self._texts = (RowsText(), RowsText())  # two lanes: chunk k is formatted in lane k % 2
-        self._lane_last: list[threading.Thread | None] = [None, None]
-        self._chunks = 0
+        self._texts = (RowsText(), RowsText())  # two lanes: a chunk's piece k is formatted in lane k % 2
+        self._lanes: list[threading.Thread | None] = [None, None]  # each lane's thread, the last chunk's
+        self._written: threading.Event | None = None  # set once the last chunk's last piece is written
         self._fh = open(self.path, "wb")
         self._fh.write((",".join(columns) + "\n").encode())
         return self
@@ -60,33 +66,47 @@ class CsvWriter:
         while len(self._waiting) >= self.IN_FLIGHT:
             self._join(self._waiting.popleft())
         self._join(None)  # (a write that failed: said now)
-        lane = self._chunks % 2
-        self._chunks += 1
-        fh, text, lane_before, before = self._fh, self._texts[lane], self._lane_last[lane], self._last
+        step = max(1, self.PIECE_VALUES // max(1, rows.shape[1]))
+        pieces = [rows[first:first + step] for first in range(0, max(len(rows), 1), step)]
+        written = [threading.Event() for _ in pieces]
+        fh, before = self._fh, self._written
 
-        def step():
-            # formatted beside the chunk before (the other lane), once this lane's last text is
-            # written; written after the chunk before
-            out = None
+        def lane(text, lane_before, ks):
+            # piece k: formatted once this lane's text before is written (its buffer is free),
+            # beside the other lane's; written after piece k - 1
             try:
                 if lane_before is not None:
                     lane_before.join()
-                if self._error is None:
-                    out = text(rows)
-            except BaseException as exc:  # (raised in the caller's thread by wait() or the next add())
-                self._error = self._error or exc
-            if before is not None:
-                before.join()
-            if out is not None and self._error is None:
-                try:
-                    fh.write(out)
-                except BaseException as exc:
-                    self._error = self._error or exc
+                for k in ks:
+                    out = None
+                    try:
+                        if self._error is None:
+                            out = text(pieces[k])
+                    except BaseException as exc:  # (raised in the caller's thread by wait() or the next add())
+                        self._error = self._error or exc
+                    prior = written[k - 1] if k else before
+                    if prior is not None:
+                        prior.wait()
+                    if out is not None and self._error is None:
+                        try:
+                            fh.write(out)
+                        except BaseException as exc:
+                            self._error = self._error or exc
+                    written[k].set()
+            finally:
+                for k in ks:  # (never a piece after it waiting for ever)
+                    written[k].set()
 
-        thread = threading.Thread(target=step, name=f"{self.path.name} writer", daemon=True)
-        thread.start()
-        self._last = self._lane_last[lane] = thread
-        self._waiting.append(thread)
+        for j in range(min(2, len(pieces))):
+            ks = range(j, len(pieces), 2)
+            thread = threading.Thread(target=lane, args=(self._texts[j], self._lanes[j], ks),
+                                      name=f"{self.path.name} writer", daemon=True)
+            thread.start()
+            self._lanes[j] = thread
+            if len(pieces) - 1 in ks:
+                self._last = thread  # (it writes the chunk's last piece, after every other)
+        self._written = written[-1]
+        self._waiting.append(self._last)
 
     def close(self) -> None:
         """The file closes after its last write, whether or not a write failed; wait() for it."""
