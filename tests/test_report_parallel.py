@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import gc
 import os
 
 import pytest
@@ -16,10 +17,13 @@ def writer(path, text):
 
 
 def test_every_job_runs_once_whichever_process_draws_it(tmp_path, monkeypatch):
+    """... and the objects frozen out of the collector's reach for the fork are in it again
+    after (a session that draws many runs would otherwise never collect them)."""
     monkeypatch.setattr(parallel, "_fork_is_safe", lambda: True)
     paths = [tmp_path / f"f{k}.txt" for k in range(5)]
     parallel.draw_all([writer(p, str(k)) for k, p in enumerate(paths)])
     assert [p.read_text() for p in paths] == [str(k) for k in range(5)]
+    assert gc.get_freeze_count() == 0
 
 
 def test_what_the_child_does_not_finish_is_drawn_here(tmp_path, monkeypatch):
@@ -44,6 +48,7 @@ def test_an_error_in_a_figure_reaches_the_caller(tmp_path, monkeypatch):
 
     with pytest.raises(ValueError, match="no such column"):
         parallel.draw_all([writer(tmp_path / "a.txt", "a"), broken])
+    assert gc.get_freeze_count() == 0
 
 
 def test_in_turn_where_forking_is_not_safe(tmp_path, monkeypatch):

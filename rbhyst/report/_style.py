@@ -56,6 +56,16 @@ def subplots(*args, figsize, **kwargs):
     return fig, fig.subplots(*args, **kwargs)
 
 
+#: zlib's fastest level for the PNGs: its default (6) spent 20-45 ms a figure compressing, a
+#: sixth of the figure's time, for files 10-20 % smaller
+PNG_OPTIONS = {"compress_level": 1}
+
+
+def write_png(fig, path) -> None:
+    """The figure as a PNG file."""
+    fig.savefig(path, pil_kwargs=dict(PNG_OPTIONS))
+
+
 def save(fig, path, margins: tuple[float, float, float, float, float] | None = None) -> None:
     """Lay the figure out and write it. ``margins`` (inches, as TIME_MARGINS) places the axes
     directly; without, matplotlib's tight layout measures every label first, which costs a
@@ -69,7 +79,7 @@ def save(fig, path, margins: tuple[float, float, float, float, float] | None = N
         height = (h - bottom - top - gap * (rows - 1)) / rows
         fig.subplots_adjust(left=left / w, right=1 - right / w, bottom=bottom / h, top=1 - top / h,
                             hspace=gap / height)
-    fig.savefig(path)
+    write_png(fig, path)
 
 
 class PlainLogFormatter(LogFormatter):

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
-from rbhyst.report._style import styled, subplots
+from rbhyst.report._style import styled, subplots, write_png
 
 #: (title, screen x axis, screen y axis) of each orthographic view: unit vectors in the deck's frame
 VIEWS = (("top (from +x3)", (1.0, 0.0, 0.0), (0.0, 1.0, 0.0), "x1 [m]", "x2 [m]"),
@@ -97,5 +97,5 @@ def plot_body_3d(result, path: Path):
     fig.suptitle(f"{system.title or 'Model'}\nm = {system.body.mass:.6g} kg, principal J = "
                  f"{', '.join(f'{x:.4g}' for x in j)} kg m² about G; coordinates from G", fontsize=9)
     fig.tight_layout()
-    fig.savefig(path)
+    write_png(fig, path)
     return fig

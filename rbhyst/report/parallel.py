@@ -10,6 +10,7 @@ child does not finish is drawn here too, so the files are the same either way.
 
 from __future__ import annotations
 
+import gc
 import os
 import signal
 import sys
@@ -30,7 +31,15 @@ def draw_all(jobs: list[Callable[[], None]]) -> None:
             job()
         return
     mine, theirs = jobs[0::2], jobs[1::2]  # alternate: figures of a kind cost alike
-    pid = os.fork()
+    # the objects made so far out of the collector's reach while the child lives: a collection
+    # in the child would otherwise write to every one of them (each page of the heap copied)
+    # and go over all of them, as the parent's would (Python's documentation of gc.freeze)
+    gc.freeze()
+    try:
+        pid = os.fork()
+    except BaseException:
+        gc.unfreeze()
+        raise
     if pid == 0:  # the child: its half, then out without running the parent's cleanup
         status = 1
         try:
@@ -54,3 +63,4 @@ def draw_all(jobs: list[Callable[[], None]]) -> None:
         if not finished:  # interrupted here: the child must be gone before the folder is removed
             os.kill(pid, signal.SIGKILL)
             os.waitpid(pid, 0)
+        gc.unfreeze()

@@ -10,7 +10,7 @@ from matplotlib.ticker import MaxNLocator
 
 from rbhyst.solve.result import Result
 from rbhyst.report._labels import Labels
-from rbhyst.report._style import NEGLIGIBLE, TIME_MARGINS, plain_number, save, styled, subplots
+from rbhyst.report._style import NEGLIGIBLE, TIME_MARGINS, plain_number, save, styled, subplots, write_png
 
 
 def _draw_outline(ax, v: np.ndarray, fill_alpha: float, labels: list[str], placer: Labels) -> None:
@@ -123,7 +123,7 @@ def plot_body(result: Result, path: Path):
                  fontsize=9)
     fig.tight_layout()
     labels.place(fig, ax, fixed)
-    fig.savefig(path)
+    write_png(fig, path)
     return fig
 
 
