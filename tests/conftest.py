@@ -102,7 +102,14 @@ def invoke(*args) -> tuple[int, str]:
     from rbhyst.cli import app
 
     res = CliRunner().invoke(app, [str(a) for a in args])
-    return res.exit_code, res.stderr
+    err = res.stderr
+    if res.exception is not None and not isinstance(res.exception, SystemExit):
+        # an exception the command let through (a bug: it says what is wrong in one line):
+        # its traceback, which the runner keeps to itself, for the test's message
+        import traceback
+
+        err += "".join(traceback.format_exception(res.exception))
+    return res.exit_code, err
 
 
 def snapshot(folder: Path) -> dict[str, tuple[bytes, int]]:

@@ -606,6 +606,36 @@ def test_a_case_that_kills_its_worker_is_failed_and_the_others_finish(project, m
     print(f"10 cases, one killing its worker: {took:.1f} s")
 
 
+def test_a_batch_given_to_a_pool_whose_worker_just_died_is_lost_with_the_others(project):
+    """The pool learns of a death in a thread of its own, between two waits of the sweep's
+    loop: a batch submitted then used to raise BrokenProcessPool in the loop (the sweep ended
+    with a traceback, exit 1, about one run in fifty of the test above). It is lost like the
+    batches in flight, and recover() runs it again on a new pool."""
+    from rbhyst.analyses.sweep.backends import LocalPool, WorkerLost
+
+    sw = load_sweep(killer_sweep(project, [700.0, 710.0, 720.0]))
+    cases = [(c.key, c.values) for c in sw.cases]
+    pool = LocalPool(1, sw.base, False)
+    try:
+        first = pool.submit(cases[:1])
+        assert pool.result(first)[0]["status"] == "ok"
+        pid, = pool._pool._processes
+        os.kill(pid, signal.SIGKILL)
+        deadline = time.monotonic() + 30
+        while not pool._pool._broken and time.monotonic() < deadline:
+            time.sleep(0.01)
+        assert pool._pool._broken, "the pool did not see its worker die"
+        late = pool.submit(cases[1:2])  # (raised here before)
+        with pytest.raises(WorkerLost):
+            pool.result(late)
+        r = pool.recover(WorkerLost("a worker process died"), late, cases[1:2], {}, alone=False)
+        assert r.again == cases[1:2] and not r.failed and not r.stop
+        again = pool.submit(r.again)
+        assert pool.result(again)[0]["status"] == "ok"
+    finally:
+        pool.close(kill=True)
+
+
 def free_port() -> int:
     import socket
 

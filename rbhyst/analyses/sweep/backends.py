@@ -145,7 +145,14 @@ class LocalPool:
 
     def submit(self, cases):
         n = next(self._ids)
-        f = self._pool.submit(run_tracked, n, run_batch, self._base, cases, self._histories)
+        try:
+            f = self._pool.submit(run_tracked, n, run_batch, self._base, cases, self._histories)
+        except cf.process.BrokenProcessPool as err:
+            # a worker died since the last wait (the pool learns it in a thread of its own): the
+            # batch is lost with those in flight, and recover() sorts them out together (raised
+            # here, it ended the sweep with a traceback)
+            f = cf.Future()
+            f.set_exception(err)
         self._batch[f] = n
         return f
 
