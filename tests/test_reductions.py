@@ -8,8 +8,11 @@ import pytest
 from rbhyst.solve.history import Extremes, PlotData
 
 
+@pytest.mark.parametrize("drawn", [True, False])
 @pytest.mark.parametrize("seed", [0, 1, 2])
-def test_chunks_of_any_size_give_numpys_extremes_and_their_first_times(seed):
+def test_chunks_of_any_size_give_numpys_extremes_and_their_first_times(seed, drawn):
+    """With the plot buckets (the compiled pass) and without (a run that keeps only its
+    reductions): the same extremes and times, and the last row."""
     rng = np.random.default_rng(seed)
     n, m = 5003, 6
     table = np.empty((n, m))
@@ -17,14 +20,35 @@ def test_chunks_of_any_size_give_numpys_extremes_and_their_first_times(seed):
     table[:, 1:] = np.round(rng.normal(size=(n, m - 1)), 1)  # coarse values: many ties
     table[:, 2] = 0.0  # a column that never moves: its extremes are at t = 0
     ex = Extremes(tuple(f"c{j}" for j in range(m)))
-    plot = PlotData(n, m)
+    plot = PlotData(n, m, drawn=drawn)
     cuts = np.sort(rng.choice(np.arange(1, n), size=7, replace=False))
     for chunk in np.split(table, cuts):
         plot.update(np.asfortranarray(chunk), ex)
     assert np.array_equal(ex.max, table.max(axis=0)) and np.array_equal(ex.min, table.min(axis=0))
     assert np.array_equal(ex.t_max, table[table.argmax(axis=0), 0])  # argmax: the first of ties
     assert np.array_equal(ex.t_min, table[table.argmin(axis=0), 0])
+    assert np.array_equal(plot.final, table[-1])
+    if not drawn:
+        with pytest.raises(ValueError, match="nothing to draw"):
+            plot.series(1)
+        return
     buckets = [table[k:k + plot.bucket] for k in range(0, n, plot.bucket)]
     assert np.array_equal(plot.hi, np.array([b.max(axis=0) for b in buckets]))
     assert np.array_equal(plot.lo, np.array([b.min(axis=0) for b in buckets]))
     assert np.array_equal(plot.t_lo, [b[0, 0] for b in buckets]) and np.array_equal(plot.t_hi, [b[-1, 0] for b in buckets])
+
+
+def test_a_run_that_keeps_only_its_reductions_has_the_same_ones():
+    """A sweep's case (rows neither kept nor written: no plot data) has the extremes, their
+    times and the final energies of the same run with its rows kept, to the bit."""
+    from conftest import DECKS
+    from rbhyst.model.deck import load_deck
+    from rbhyst.results.analysis import run_deck
+
+    deck = load_deck(DECKS / "seed_wri.toml").with_values({"analysis.duration": 4.0})
+    lean, kept = run_deck(deck, keep=False), run_deck(deck, keep=True)
+    assert not lean.plot.drawn and kept.plot.drawn
+    for name in ("max", "min", "t_max", "t_min"):
+        assert np.array_equal(getattr(lean.extremes, name), getattr(kept.extremes, name)), name
+    assert lean.energy_summary() == kept.energy_summary()
+    assert lean.extremes.peaks() == kept.extremes.peaks()

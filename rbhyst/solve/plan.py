@@ -71,7 +71,8 @@ class Rows:
         self.every = every
         self.dt = dt
         self.extremes = Extremes(layout.names)
-        self.plot = PlotData(n_steps + 1, len(layout.names))
+        # (a run that keeps neither its rows nor a folder of them has nothing to draw: a sweep's case)
+        self.plot = PlotData(n_steps + 1, len(layout.names), drawn=keep or csv is not None)
         # the kept rows, allocated once and column by column (as Layout.table writes them): no
         # chunk is copied twice, and a column (Result.column, to_pandas) is contiguous
         n_rows = n_steps // every + 1
