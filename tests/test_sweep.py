@@ -8,6 +8,7 @@ analysis.duration so that the whole file takes seconds of computing.
 
 from __future__ import annotations
 
+import csv
 import json
 import os
 import re
@@ -177,8 +178,8 @@ def test_stats_of_many_groups_are_each_groups_own(project):
         members = [c for c in cases if repr(c.vary["body.mass"]) == s["body.mass"]]
         x = np.array([results[c.key]["peaks"][s["peak"][5:]] for c in members if results[c.key]["status"] == "ok"
                       and results[c.key]["peaks"][s["peak"][5:]] is not None])
-        assert s["count"] == len(x)
-        assert s["failed"] == sum(results[c.key]["status"] == "failed" for c in members)
+        assert s["count"] == str(len(x))
+        assert s["failed"] == str(sum(results[c.key]["status"] == "failed" for c in members))
         want = ["", "", "", ""] if len(x) == 0 else [repr(float(f(x))) for f in (
             np.mean, np.median, lambda v: np.percentile(v, PERCENTILE), np.max)]
         assert [s["mean"], s["median"], s["p84"], s["max"]] == want
@@ -984,10 +985,28 @@ def test_ending_the_workers_mid_message_does_not_hang_the_sweep():
     assert not closing.is_alive(), "closing the pool hung on the half-sent result"
 
 
+def test_stats_cells_that_need_quotes_read_back_as_written(tmp_path):
+    """stats.csv is written as text, not through the csv module's rows: a vary value with a
+    comma, a quote or a line break is quoted as the module quotes it, and reads back whole."""
+    from rbhyst.analyses.sweep.cases import Case, format_value
+    from rbhyst.analyses.sweep.tables import write_stats
+
+    values = ["a,b", 'say "x"', "two\nlines", "plain"]
+    cases = [Case(k + 1, "m", 1.0, 1.0, {"title": v}, {}, f"{k:032x}") for k, v in enumerate(values)]
+    results = {c.key: {"key": c.key, "status": "ok", "peaks": {"u1_m": 0.5 + c.number}} for c in cases}
+    write_stats(tmp_path / "stats.csv", cases, ["title"], results)
+    with open(tmp_path / "stats.csv", encoding="utf-8", newline="") as fh:
+        rows = list(csv.reader(fh))
+    assert rows[0] == ["scale", "title", "peak", "count", "failed", "mean", "median", "p84", "max"]
+    assert [r[1] for r in rows[1:]] == [format_value(v) for v in values]
+    assert [r[5:] for r in rows[1:]] == [[repr(0.5 + k)] * 4 for k in range(1, 5)]
+
+
 def test_stats_numbers_are_each_value_s_own_repr():
     """stats.csv formats a group's mean, median, p84 and max once where they are equal, and
     never writes -0.0 as 0.0 (nor 0.0 as -0.0)."""
-    from rbhyst.analyses.sweep.tables import _nums
+    from rbhyst.analyses.sweep.tables import _stats_text
 
-    assert _nums([1.5, 1.5, 0.1 + 0.2, None]) == ["1.5", "1.5", "0.30000000000000004", ""]
-    assert _nums([-0.0, 0.0, 0.0, -0.0]) == ["-0.0", "0.0", "0.0", "-0.0"]
+    assert _stats_text(1.5, 1.5, 0.1 + 0.2, 0.1 + 0.2) == "1.5,1.5,0.30000000000000004,0.30000000000000004\n"
+    assert _stats_text(-0.0, 0.0, 0.0, -0.0) == "-0.0,0.0,0.0,-0.0\n"
+    assert _stats_text(float("nan"), float("nan"), 1.0, 1.0) == "nan,nan,1.0,1.0\n"

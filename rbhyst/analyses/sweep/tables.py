@@ -7,6 +7,8 @@ listed case sets).
 
 from __future__ import annotations
 
+import csv
+import io
 from collections.abc import Iterable, Iterator
 
 import numpy as np
@@ -34,18 +36,6 @@ def result_columns(entries: Iterable[dict | None]) -> list[str]:
     return [prefix[g] + n for g, names in groups.items() for n in names]
 
 
-def result_values(entry: dict | None, columns: list[str]) -> dict[str, float | None]:
-    """The entry's numbers under the column names of :func:`result_columns`."""
-    out: dict[str, float | None] = {}
-    flat = {}
-    if entry and entry.get("status") == "ok":
-        for g, prefix in _PREFIX.items():
-            flat.update({prefix + k: v for k, v in (entry.get(g) or {}).items()})
-    for c in columns:
-        out[c] = flat.get(c)
-    return out
-
-
 def case_status(case: Case, entry: dict | None) -> tuple[str, str]:
     if case.problem is not None:
         return "failed", case.problem
@@ -59,13 +49,20 @@ def cases_table(cases: list[Case], vary_keys: list[str], results: dict[str, dict
     entries = [None if c.problem else results.get(c.key) for c in cases]
     columns = result_columns(entries)
     header = ["case", "motion", "scale", *vary_keys, "status", "message", *columns]
+    # each group's keys -> their cells (a case has the numbers of its groups; the others empty)
+    where = {g: {c[len(prefix):]: i for i, c in enumerate(columns) if c.startswith(prefix)}
+             for g, prefix in _PREFIX.items()}
     rows = []
     for c, e in zip(cases, entries):
         status, message = case_status(c, e)
-        values = result_values(e, columns)
+        cells = [""] * len(columns)
+        if e and e.get("status") == "ok":
+            for g, at in where.items():
+                for k, v in (e.get(g) or {}).items():
+                    cells[at[k]] = _num(v)
         rows.append([c.number, c.motion, _num(c.scale),
                      *[format_value(c.vary[k]) if k in c.vary else "" for k in vary_keys],
-                     status, message, *[_num(values[k]) for k in columns]])
+                     status, message, *cells])
     return header, rows
 
 
@@ -75,18 +72,31 @@ GROUPS_AT_ONCE = 1000
 
 
 def stats_table(cases: list[Case], vary_keys: list[str], results: dict[str, dict]) -> tuple[list[str], list[list]]:
-    """stats.csv: for each scale level and vary combination, over its motions, the count of
-    finished runs, the failed ones, and mean, median, 84th percentile (numpy's linear
-    interpolation between order statistics) and max of every peak."""
-    return stats_header(vary_keys), list(stats_rows(cases, vary_keys, results))
+    """stats.csv as a header and rows of its cells (text), as a reader of the file sees them."""
+    rows = list(csv.reader(io.StringIO("".join(stats_lines(cases, vary_keys, results)))))
+    return stats_header(vary_keys), rows
 
 
 def stats_header(vary_keys: list[str]) -> list[str]:
     return [STATS_HEADER[0], *vary_keys, *STATS_HEADER[1:]]
 
 
-def stats_rows(cases: list[Case], vary_keys: list[str], results: dict[str, dict]) -> Iterator[list]:
-    """stats_table's rows, as they come: a few groups at a time in memory."""
+def write_stats(path, cases: list[Case], vary_keys: list[str], results: dict[str, dict]) -> None:
+    """stats.csv: for each scale level and vary combination, over its motions, the count of
+    finished runs, the failed ones, and mean, median, 84th percentile (numpy's linear
+    interpolation between order statistics) and max of every peak; the bytes Python's csv
+    module writes (one line ending: \\n), a few groups at a time in memory."""
+    with open(path, "w", encoding="utf-8", newline="") as fh:
+        fh.write(_csv_text(stats_header(vary_keys)) + "\n")
+        for lines in stats_lines(cases, vary_keys, results):
+            fh.write(lines)
+
+
+def stats_lines(cases: list[Case], vary_keys: list[str], results: dict[str, dict]) -> Iterator[str]:
+    """stats.csv's lines after its header, GROUPS_AT_ONCE groups' at a time.
+
+    Written as text, not as rows for the csv module: a sweep of 10,000 cases has 370,000 rows,
+    and a list of cells for each was most of the 2.7 s its tables took after the last case."""
     entries = {c.key: (None if c.problem else results.get(c.key)) for c in cases}
     peaks = [c for c in result_columns(entries.values()) if c.startswith("peak_")]
     groups: dict[tuple, list[Case]] = {}
@@ -94,12 +104,13 @@ def stats_rows(cases: list[Case], vary_keys: list[str], results: dict[str, dict]
         ident = (c.scale, tuple(format_value(c.vary[k]) if k in c.vary else "" for k in vary_keys))
         groups.setdefault(ident, []).append(c)
     items = list(groups.items())
+    peak_texts = [_csv_text([p]) for p in peaks]
     for first in range(0, len(items), GROUPS_AT_ONCE):
-        yield from _stats_rows(items[first:first + GROUPS_AT_ONCE], entries, peaks)
+        yield _stats_lines(items[first:first + GROUPS_AT_ONCE], entries, peaks, peak_texts)
 
 
-def _stats_rows(groups: list[tuple[tuple, list[Case]]], entries: dict, peaks: list[str]) -> list[list]:
-    rows = []
+def _stats_lines(groups: list[tuple[tuple, list[Case]]], entries: dict, peaks: list[str],
+                 peak_texts: list[str]) -> str:
     # every member's peaks in one matrix (have: the case finished and has that peak)
     names = [p[len(_PREFIX["peaks"]):] for p in peaks]
     members = [c for _, ms in groups for c in ms]
@@ -126,47 +137,60 @@ def _stats_rows(groups: list[tuple[tuple, list[Case]]], entries: dict, peaks: li
     # group is one case); the (group, peak) pairs of the others one by one
     by_count: dict[int, tuple[list[int], list[np.ndarray]]] = {}  # count -> rows, their values
     whole: dict[int, tuple[list[int], list[np.ndarray]]] = {}  # size -> first rows, (size, peaks) values
+    heads: list[str] = []  # each row's text before its statistics
+    complete = have.all(axis=1)
     first = 0
     for ((level, vary), ms), failed in zip(groups, failed_of):
         span = slice(first, first + len(ms))
         first += len(ms)
-        head = [_num(level), *vary]
-        at = len(rows)
-        if have[span].all():
+        head = _csv_text([_num(level), *vary]) + ","
+        at = len(heads)
+        if complete[span].all():
             starts, blocks = whole.setdefault(len(ms), ([], []))
             starts.append(at)
             blocks.append(values[span])
-            rows.extend([*head, p, len(ms), failed] for p in peaks)
+            tail = f",{len(ms)},{failed},"
+            heads.extend(head + p + tail for p in peak_texts)
             continue
-        for j, p in enumerate(peaks):
+        for j, p in enumerate(peak_texts):
             x = values[span, j][have[span, j]]
             rows_n, xs = by_count.setdefault(len(x), ([], []))
-            rows_n.append(len(rows))
+            rows_n.append(len(heads))
             xs.append(x)
-            rows.append([*head, p, len(x), failed])
+            heads.append(f"{head}{p},{len(x)},{failed},")
     batches = [([s + j for s in starts for j in range(len(peaks))],  # (group, peak) in order, peaks within
                 np.stack(blocks).transpose(0, 2, 1).reshape(len(starts) * len(peaks), n))
                for n, (starts, blocks) in whole.items()]
     batches += [(at, np.array(xs, dtype=float).reshape(len(xs), n)) for n, (at, xs) in by_count.items()]
+    lines = [""] * len(heads)
     for at, x in batches:
         s = peak_stats(x)
-        for i, *stats in zip(at, s["mean"], s["median"], s["p84"], s["max"]):
-            rows[i].extend(_nums(stats))
-    return rows
-
-
-def _nums(values: list) -> list[str]:
-    """_num of each value, each distinct value formatted once (a group of one case, or of equal
-    peaks, has its mean, median, p84 and max alike: a sweep of 10,000 cases writes 370,000 rows)."""
-    out, last, text = [], None, ""
-    for v in values:
-        if v is None:
-            out.append("")
+        if x.shape[1] == 0:
+            for i in at:
+                lines[i] = heads[i] + ",,,\n"
             continue
-        if v != last or v == 0.0:  # (0.0 and -0.0 are equal, and written apart)
-            last, text = v, repr(float(v))
-        out.append(text)
-    return out
+        for i, stats in zip(at, zip(s["mean"], s["median"], s["p84"], s["max"])):
+            lines[i] = heads[i] + _stats_text(*stats)
+    return "".join(lines)
+
+
+def _stats_text(mean: float, median: float, p84: float, top: float) -> str:
+    """The four statistics' cells and the line's end, each value exactly (its repr); a value
+    equal to the one before is formatted once (a group of one case, or of equal peaks, has all
+    four alike), but 0.0 and -0.0, equal, are each written as they are."""
+    a = repr(mean)
+    b = a if median == mean and median != 0.0 else repr(median)
+    c = b if p84 == median and p84 != 0.0 else repr(p84)
+    d = c if top == p84 and top != 0.0 else repr(top)
+    return f"{a},{b},{c},{d}\n"
+
+
+def _csv_text(fields: list) -> str:
+    """The cells as one line of Python's csv module, without its line ending (a cell with a
+    comma, a quote or a line break quoted)."""
+    buf = io.StringIO()
+    csv.writer(buf, lineterminator="\n").writerow(fields)  # (its line ending is what it quotes for)
+    return buf.getvalue()[:-1]
 
 
 def peak_stats(x: np.ndarray) -> dict[str, list[float | None]]:
