@@ -52,3 +52,19 @@ def test_a_run_that_keeps_only_its_reductions_has_the_same_ones():
         assert np.array_equal(getattr(lean.extremes, name), getattr(kept.extremes, name)), name
     assert lean.energy_summary() == kept.energy_summary()
     assert lean.extremes.peaks() == kept.extremes.peaks()
+
+
+def test_the_largest_combination_is_numpys_to_the_bit():
+    """The kinematic check's compiled pass (rbhyst.solve.kinematic.model_residual): max_t
+    |a x(t) + b y(t)| per element, the bits numpy's arrays of every element and row give."""
+    from rbhyst.solve.kernels.compiled import kernel
+
+    rng = np.random.default_rng(5)
+    a, b = rng.normal(size=8), rng.normal(size=8) * 1e-3
+    theta = np.cumsum(rng.normal(size=4001)) * 1e-4
+    x, y = np.sin(theta) - theta, np.cos(theta) - 1.0
+    out = np.empty(8)
+    kernel("largest_combination")(a, b, x, y, out)
+    assert np.array_equal(out, np.abs(a[:, None] * x[None, :] + b[:, None] * y[None, :]).max(axis=1))
+    kernel("largest_combination")(a, b, x[:0], y[:0], out)
+    assert np.array_equal(out, np.zeros(8))

@@ -719,12 +719,17 @@ def _row_groups(keyed: np.ndarray, deck: dk.Deck) -> tuple[list[int], np.ndarray
     the order of their first elements; each element's row)."""
     key = np.round(keyed / 1e-12).astype(np.int64)
     set_ids = {name: i for i, name in enumerate(deck.hysteresis)}
-    key = np.column_stack([key, [set_ids[el.hysteresis] for el in deck.all_elements]])
-    _, first, inverse = np.unique(key, axis=0, return_index=True, return_inverse=True)
-    order = np.argsort(first)  # rows in the order of their first element
-    row_of = np.empty(len(first), dtype=int)
-    row_of[order] = np.arange(len(first))
-    return [int(first[k]) for k in order], row_of[inverse.ravel()]
+    # (a dictionary of the keys: numpy's unique of rows went through a sort of a structured
+    # view, a tenth of a sweep case's assembly for a few elements)
+    rows: dict[tuple, int] = {}
+    firsts: list[int] = []
+    row_of = np.empty(len(key), dtype=int)
+    for i, (k, el) in enumerate(zip(key.tolist(), deck.all_elements)):
+        row = rows.setdefault((*k, set_ids[el.hysteresis]), len(firsts))
+        if row == len(firsts):
+            firsts.append(i)
+        row_of[i] = row
+    return firsts, row_of
 
 
 def _set_stiffnesses(deck: dk.Deck) -> tuple[dict, dict, dict]:
@@ -742,10 +747,11 @@ def _set_stiffnesses(deck: dk.Deck) -> tuple[dict, dict, dict]:
 
 
 def _system(deck: dk.Deck, body, mass, rows, names, mult, elements, excitation, notes, dampers, weight,
-            **extra) -> System:
-    """The System of rows built by either assembly: the sets per row, Rayleigh damping from
-    their K0 where the deck asks for it, and ``extra`` (kinematics, frame, coordinates)."""
-    sets, k_rev, k_el = _set_stiffnesses(deck)
+            stiffnesses, **extra) -> System:
+    """The System of rows built by either assembly: the sets per row (``stiffnesses``: what
+    _set_stiffnesses gives), Rayleigh damping from their K0 where the deck asks for it, and
+    ``extra`` (kinematics, frame, coordinates)."""
+    sets, k_rev, k_el = stiffnesses
     bvec = np.array(rows)
     rayleigh = None
     if deck.damping is not None and deck.damping.rayleigh is not None:
@@ -790,7 +796,7 @@ def assemble(deck: dk.Deck, base: Path, run: bool = True) -> System:
         return assemble_space(deck, base, run)
     body, notes = body_from_deck(deck.body)
     mass = np.array([body.mass, body.mass, body.inertia])
-    _set_stiffnesses(deck)  # (a set that cannot be an element says so before the elements do)
+    stiffnesses = _set_stiffnesses(deck)  # (a set that cannot be an element says so before the elements do)
 
     exact = deck.analysis is not None and deck.analysis.kinematics == "exact"
     rows, axial, names, mult, elements = _kernel_rows(deck, body, exact)
@@ -810,7 +816,7 @@ def assemble(deck: dk.Deck, base: Path, run: bool = True) -> System:
     if deck.body.gravity is not None:
         weight = body.mass * np.array([deck.body.gravity[0], deck.body.gravity[1], 0.0])
     system = _system(deck, body, mass, rows, names, mult, elements, excitation, notes, dampers, weight,
-                     kinematics="exact" if exact else "small", axial=axial if exact else None)
+                     stiffnesses, kinematics="exact" if exact else "small", axial=axial if exact else None)
     if exact and arm_turns(excitation):
         system = replace(system, excitation=replace(excitation, follow=True))
     return system
@@ -902,7 +908,7 @@ def assemble_space(deck: dk.Deck, base: Path, run: bool = True) -> System:
     body, notes = solid_from_deck(deck.body)
     j_diag, frame = principal_frame(body.inertia)
     mass = np.concatenate([[body.mass] * 3, j_diag])
-    _set_stiffnesses(deck)  # (a set that cannot be an element says so before the elements do)
+    stiffnesses = _set_stiffnesses(deck)  # (a set that cannot be an element says so before the elements do)
     rows, names, mult, elements, axial = _kernel_rows_space(deck, body, frame, exact)
     bvec = np.array(rows)
     notes.extend(implausible_geometry(body, elements))
@@ -924,10 +930,10 @@ def assemble_space(deck: dk.Deck, base: Path, run: bool = True) -> System:
         weight = np.concatenate([body.mass * np.asarray(deck.body.gravity, dtype=float), np.zeros(3)])
     if not exact:
         return _system(deck, body, mass, rows, names, mult, elements, excitation, notes, dampers, weight,
-                       coordinates=SPACE, frame=frame)
+                       stiffnesses, coordinates=SPACE, frame=frame)
     p = np.eye(3) if frame is None else frame[3:, 3:]
     axial = np.concatenate([axial, p.T @ np.asarray(excitation.point, dtype=float)])
     if arm_turns(excitation):  # forces away from G: their three components (rotation axes) follow
         excitation = replace(excitation, follow=True, turning=space_turning(p))
     return _system(deck, body, mass, rows, names, mult, elements, excitation, notes, dampers, weight,
-                   coordinates=SPACE, frame=frame, kinematics="exact", axial=axial)
+                   stiffnesses, coordinates=SPACE, frame=frame, kinematics="exact", axial=axial)

@@ -107,6 +107,7 @@ def model_residual(result, start: float) -> tuple[float, str]:
     bound: the response may amplify a residual."""
     from rbhyst.model.system import axial_offset
     from rbhyst.solve.history import estimate_columns, largest_abs
+    from rbhyst.solve.kernels.compiled import kernel
 
     system, layout = result.system, result.layout
     columns = {k: i for i, (k, _, _) in enumerate(estimate_columns(layout))}
@@ -121,11 +122,13 @@ def model_residual(result, start: float) -> tuple[float, str]:
     forces = rows[:, [columns[f"e{k}_f"] for k in range(1, len(b3) + 1)]]
     best, where = 0.0, ""
     # each element's deformation error against its deformation (its force over k0: the rows
-    # compare forces, not deformations); element by element along the run, as memory runs
-    du = b3[:, None] * (sn - theta)[None, :] + c[:, None] * cm1[None, :]
+    # compare forces, not deformations)
+    du = np.empty(len(b3))
+    kernel("largest_combination")(np.ascontiguousarray(b3, dtype=float), c, np.ascontiguousarray(sn - theta),
+                                  cm1, du)
     scale = largest_abs(forces) / np.maximum(k0, 1e-300)
     with np.errstate(divide="ignore", invalid="ignore"):
-        share = np.where(scale > 0, np.abs(du).max(axis=1) / scale, 0.0)
+        share = np.where(scale > 0, du / scale, 0.0)
     if share.size and share.max() > best:
         best, where = float(share.max()), f"e{int(share.argmax()) + 1}_u"
     key = system.coordinates[rot].key("R")

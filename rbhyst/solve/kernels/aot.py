@@ -53,6 +53,8 @@ EXPORTS = {
     "reduce_rows": ("rbhyst.solve.kernels.reduce", "reduce_rows",
                     "void(f8[:,:], i8, i8, f8[::1], f8[::1], f8[::1], f8[::1], f8[:,::1], f8[:,::1], "
                     "f8[::1], f8[::1])"),
+    "largest_combination": ("rbhyst.solve.kernels.reduce", "largest_combination",
+                            "void(f8[::1], f8[::1], f8[::1], f8[::1], f8[::1])"),
 }
 
 
