@@ -1002,6 +1002,28 @@ def test_stats_cells_that_need_quotes_read_back_as_written(tmp_path):
     assert [r[5:] for r in rows[1:]] == [[repr(0.5 + k)] * 4 for k in range(1, 5)]
 
 
+@pytest.mark.filterwarnings("ignore:invalid value encountered in subtract")  # (numpy's p84 of inf)
+def test_a_group_of_one_case_repeats_its_cases_csv_cells_only_where_numpy_would(tmp_path):
+    """stats.csv takes a group of one finished case's statistics from its cells in cases.csv
+    (not formatted again) only where numpy's mean, median, p84 and max of the one value are
+    that value: not for -0.0 (its mean is 0.0), inf (its p84 nan) or an int (cases.csv writes
+    3, stats.csv 3.0). The same bytes as computing them all."""
+    from rbhyst.analyses.sweep.cases import Case
+    from rbhyst.analyses.sweep.tables import cases_table, peak_cells, write_stats
+
+    cases = [Case(k + 1, "m", 1.0, 1.0, {"body.mass": 700.0 + k}, {}, f"{k:032x}") for k in range(12)]
+    odd = [0.1, 3, -0.0, float("inf"), 0.0, float("nan"), 1e-300]
+    results = {c.key: {"key": c.key, "status": "ok", "peaks": {"u1_m": odd[c.number % len(odd)],
+                                                               "at1_m_s2": 1.0 / c.number}} for c in cases}
+    results[cases[4].key] = {"key": cases[4].key, "status": "failed", "message": "diverged"}
+    header, rows = cases_table(cases, ["body.mass"], results)
+    write_stats(tmp_path / "computed.csv", cases, ["body.mass"], results)
+    write_stats(tmp_path / "known.csv", cases, ["body.mass"], results, known=peak_cells(header, rows, cases))
+    computed = (tmp_path / "computed.csv").read_bytes()
+    assert (tmp_path / "known.csv").read_bytes() == computed
+    assert b"peak_u1_m,1,0,0.0,0.0,-0.0,-0.0" in computed and b"peak_u1_m,1,0,inf,inf,nan,inf" in computed
+
+
 def test_stats_numbers_are_each_value_s_own_repr():
     """stats.csv formats a group's mean, median, p84 and max once where they are equal, and
     never writes -0.0 as 0.0 (nor 0.0 as -0.0)."""

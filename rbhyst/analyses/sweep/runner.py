@@ -18,7 +18,7 @@ from rbhyst.files.outdir import MANIFEST, read_manifest, staged_directory
 from rbhyst.analyses.sweep.backends import WorkerLost
 from rbhyst.analyses.sweep.cases import Sweep
 from rbhyst.analyses.sweep.store import Journal
-from rbhyst.analyses.sweep.tables import PERCENTILE, cases_table, write_csv, write_stats
+from rbhyst.analyses.sweep.tables import PERCENTILE, cases_table, peak_cells, write_csv, write_stats
 
 #: the files a sweep writes into its folder (beside its own .rbhyst-sweep/)
 CASES_CSV, STATS_CSV, SWEEP_JSON, HISTORIES_FILE = "cases.csv", "stats.csv", "sweep.json", "histories.parquet"
@@ -338,7 +338,8 @@ def _write_files(outcome: Outcome, journal: Journal, save_histories: bool, plott
     header, rows = outcome.table()
     with staged_directory(outcome.out) as tmp:
         write_csv(tmp / CASES_CSV, header, rows)
-        write_stats(tmp / STATS_CSV, sweep.cases, sweep.vary_keys, outcome.results)
+        write_stats(tmp / STATS_CSV, sweep.cases, sweep.vary_keys, outcome.results,
+                    known=peak_cells(header, rows, sweep.cases))
         (tmp / SWEEP_JSON).write_text(json.dumps(_about(outcome), indent=2) + "\n", encoding="utf-8")
         if save_histories:
             from rbhyst.analyses.sweep.histories import assemble

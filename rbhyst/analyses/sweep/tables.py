@@ -81,22 +81,37 @@ def stats_header(vary_keys: list[str]) -> list[str]:
     return [STATS_HEADER[0], *vary_keys, *STATS_HEADER[1:]]
 
 
-def write_stats(path, cases: list[Case], vary_keys: list[str], results: dict[str, dict]) -> None:
+def write_stats(path, cases: list[Case], vary_keys: list[str], results: dict[str, dict],
+                known: dict[str, list[str]] | None = None) -> None:
     """stats.csv: for each scale level and vary combination, over its motions, the count of
     finished runs, the failed ones, and mean, median, 84th percentile (numpy's linear
     interpolation between order statistics) and max of every peak; the bytes Python's csv
-    module writes (one line ending: \\n), a few groups at a time in memory."""
+    module writes (one line ending: \\n), a few groups at a time in memory. ``known``: see
+    stats_lines."""
     with open(path, "w", encoding="utf-8", newline="") as fh:
         fh.write(_csv_text(stats_header(vary_keys)) + "\n")
-        for lines in stats_lines(cases, vary_keys, results):
+        for lines in stats_lines(cases, vary_keys, results, known):
             fh.write(lines)
 
 
-def stats_lines(cases: list[Case], vary_keys: list[str], results: dict[str, dict]) -> Iterator[str]:
+def peak_cells(header: list[str], rows: list[list], cases: list[Case]) -> dict[str, list[str]]:
+    """Each case's peak cells in cases.csv (cases_table's header and rows), by case key."""
+    at = [i for i, h in enumerate(header) if h.startswith(_PREFIX["peaks"])]
+    if not at:
+        return {}
+    lo, hi = at[0], at[-1] + 1
+    return {c.key: row[lo:hi] for c, row in zip(cases, rows)}
+
+
+def stats_lines(cases: list[Case], vary_keys: list[str], results: dict[str, dict],
+                known: dict[str, list[str]] | None = None) -> Iterator[str]:
     """stats.csv's lines after its header, GROUPS_AT_ONCE groups' at a time.
 
     Written as text, not as rows for the csv module: a sweep of 10,000 cases has 370,000 rows,
-    and a list of cells for each was most of the 2.7 s its tables took after the last case."""
+    and a list of cells for each was most of the 2.7 s its tables took after the last case.
+    ``known`` (peak_cells): the text of each case's peaks in cases.csv, which a group of one
+    finished case repeats as its mean, median, p84 and max (the same numbers: numpy's of one
+    value is the value), without formatting them again."""
     entries = {c.key: (None if c.problem else results.get(c.key)) for c in cases}
     peaks = [c for c in result_columns(entries.values()) if c.startswith("peak_")]
     groups: dict[tuple, list[Case]] = {}
@@ -106,16 +121,18 @@ def stats_lines(cases: list[Case], vary_keys: list[str], results: dict[str, dict
     items = list(groups.items())
     peak_texts = [_csv_text([p]) for p in peaks]
     for first in range(0, len(items), GROUPS_AT_ONCE):
-        yield _stats_lines(items[first:first + GROUPS_AT_ONCE], entries, peaks, peak_texts)
+        yield _stats_lines(items[first:first + GROUPS_AT_ONCE], entries, peaks, peak_texts, known or {})
 
 
 def _stats_lines(groups: list[tuple[tuple, list[Case]]], entries: dict, peaks: list[str],
-                 peak_texts: list[str]) -> str:
-    # every member's peaks in one matrix (have: the case finished and has that peak)
+                 peak_texts: list[str], known: dict[str, list[str]]) -> str:
+    # every member's peaks in one matrix (have: the case finished and has that peak; floats:
+    # every peak it has is a float, whose cell in cases.csv is its repr, not an int's text)
     names = [p[len(_PREFIX["peaks"]):] for p in peaks]
     members = [c for _, ms in groups for c in ms]
     values = np.zeros((len(members), len(peaks)))
     have = np.zeros((len(members), len(peaks)), dtype=bool)
+    floats = [True] * len(members)
     failed_of, first = [], 0
     for _, ms in groups:
         failed = 0
@@ -128,6 +145,7 @@ def _stats_lines(groups: list[tuple[tuple, list[Case]]], entries: dict, peaks: l
                     v = got.get(name)
                     if v is not None:
                         values[first, j], have[first, j] = v, True
+                        floats[first] = floats[first] and type(v) is float
             first += 1
         failed_of.append(failed)
     # every (group, peak) with as many values at once, a row of a matrix each: the same numbers
@@ -137,14 +155,21 @@ def _stats_lines(groups: list[tuple[tuple, list[Case]]], entries: dict, peaks: l
     # group is one case); the (group, peak) pairs of the others one by one
     by_count: dict[int, tuple[list[int], list[np.ndarray]]] = {}  # count -> rows, their values
     whole: dict[int, tuple[list[int], list[np.ndarray]]] = {}  # size -> first rows, (size, peaks) values
-    heads: list[str] = []  # each row's text before its statistics
+    heads: list[str] = []  # each row's text before its statistics (the whole line where it has them)
     complete = have.all(axis=1)
+    # numpy's statistics of one value are that value where it is finite and not -0.0 (the mean
+    # of -0.0 is 0.0, the p84 of inf is nan): a case's own peaks as they are in cases.csv
+    as_is = np.array(floats) & np.isfinite(values).all(axis=1) & ~((values == 0.0) & np.signbit(values)).any(axis=1)
     first = 0
     for ((level, vary), ms), failed in zip(groups, failed_of):
         span = slice(first, first + len(ms))
         first += len(ms)
         head = _csv_text([_num(level), *vary]) + ","
         at = len(heads)
+        cells = known.get(ms[0].key) if len(ms) == 1 and complete[span.start] and as_is[span.start] else None
+        if cells is not None and len(cells) == len(peaks):
+            heads.extend(f"{head}{p},1,{failed},{t},{t},{t},{t}\n" for p, t in zip(peak_texts, cells))
+            continue
         if complete[span].all():
             starts, blocks = whole.setdefault(len(ms), ([], []))
             starts.append(at)
@@ -162,7 +187,7 @@ def _stats_lines(groups: list[tuple[tuple, list[Case]]], entries: dict, peaks: l
                 np.stack(blocks).transpose(0, 2, 1).reshape(len(starts) * len(peaks), n))
                for n, (starts, blocks) in whole.items()]
     batches += [(at, np.array(xs, dtype=float).reshape(len(xs), n)) for n, (at, xs) in by_count.items()]
-    lines = [""] * len(heads)
+    lines = heads  # (the rows below get their statistics; the others are whole)
     for at, x in batches:
         s = peak_stats(x)
         if x.shape[1] == 0:
