@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
@@ -54,17 +56,38 @@ def test_a_run_that_keeps_only_its_reductions_has_the_same_ones():
     assert lean.extremes.peaks() == kept.extremes.peaks()
 
 
-def test_the_largest_combination_is_numpys_to_the_bit():
-    """The kinematic check's compiled pass (rbhyst.solve.kinematic.model_residual): max_t
-    |a x(t) + b y(t)| per element, the bits numpy's arrays of every element and row give."""
+def test_the_neglected_terms_are_numpy_s_to_rounding():
+    """The kinematic check's compiled pass (rbhyst.solve.kinematic.model_residual): each
+    element's largest neglected deformation max_t |b3 (sin theta - theta) + c (cos theta - 1)|
+    and the moment resultant's, as numpy's arrays give them where theta is large enough for
+    sin(theta) - theta to keep its digits, and its series where it is not (the small angles
+    of a run, and past the series' 0.25 rad)."""
     from rbhyst.solve.kernels.compiled import kernel
 
     rng = np.random.default_rng(5)
-    a, b = rng.normal(size=8), rng.normal(size=8) * 1e-3
-    theta = np.cumsum(rng.normal(size=4001)) * 1e-4
-    x, y = np.sin(theta) - theta, np.cos(theta) - 1.0
-    out = np.empty(8)
-    kernel("largest_combination")(a, b, x, y, out)
-    assert np.array_equal(out, np.abs(a[:, None] * x[None, :] + b[:, None] * y[None, :]).max(axis=1))
-    kernel("largest_combination")(a, b, x[:0], y[:0], out)
-    assert np.array_equal(out, np.zeros(8))
+    a, b = rng.normal(size=8), rng.normal(size=8) * 1e-2
+    forces = rng.normal(size=(4001, 8)) * 1e3
+    for scale in (1e-4, 0.05, 0.3):
+        theta = np.cumsum(rng.normal(size=4001)) * scale / 60
+        exact = scale < 0.01  # (numpy's sin(theta) - theta and cos(theta) - 1 lose their digits)
+        s = np.array([sin_minus_x(x) for x in theta]) if exact else np.sin(theta) - theta
+        m = np.array([cos_minus_one(x) for x in theta]) if exact else np.cos(theta) - 1.0
+        top = np.empty(8)
+        dr = kernel("neglected_terms")(theta, a, b, forces, top)
+        want = np.abs(a[:, None] * s[None, :] + b[:, None] * m[None, :]).max(axis=1)
+        assert np.allclose(top, want, rtol=1e-12, atol=0), scale
+        want_r = np.abs(m * (forces @ a) - (theta + s) * (forces @ b)).max()
+        assert abs(dr - want_r) <= 1e-12 * want_r, scale
+    assert kernel("neglected_terms")(theta[:0], a, b, forces[:0], top) == 0.0 and not top.any()
+
+
+def sin_minus_x(x: float) -> float:
+    """sin(x) - x without the cancellation: its series to x^15, summed smallest first."""
+    terms = [(-1) ** k * x ** (2 * k + 1) / math.factorial(2 * k + 1) for k in range(1, 8)]
+    return sum(reversed(terms))
+
+
+def cos_minus_one(x: float) -> float:
+    """cos(x) - 1 without the cancellation: its series to x^14, summed smallest first."""
+    terms = [(-1) ** k * x ** (2 * k) / math.factorial(2 * k) for k in range(1, 8)]
+    return sum(reversed(terms))

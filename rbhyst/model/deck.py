@@ -40,7 +40,9 @@ U = TypeVar("U")
 
 
 class _Model(BaseModel):
-    model_config = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False, frozen=True)
+    # (validators built at first use, not at import: a command imports every model and validates
+    # with one, the deck; 5 ms of its start)
+    model_config = ConfigDict(extra="forbid", strict=True, allow_inf_nan=False, frozen=True, defer_build=True)
 
 
 # ---------------------------------------------------------------- hysteresis

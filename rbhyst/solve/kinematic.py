@@ -114,28 +114,25 @@ def model_residual(result, start: float) -> tuple[float, str]:
     rows = result.compared[:, 1:]
     rot = next(j for j, c in enumerate(system.coordinates) if c.rotation)
     theta = start + rows[:, columns[system.coordinates[rot].key("d")]]
-    sn, cm1 = np.sin(theta), np.cos(theta) - 1.0
-    b3 = system.expand(system.bvec[None, :, rot])[0]
+    b3 = np.ascontiguousarray(system.expand(system.bvec[None, :, rot])[0], dtype=float)
     c = np.array([axial_offset(el.x[0], el.x[1], np.radians(el.angle_deg))
-                  for el in system.elements for _ in range(el.count)])
+                  for el in system.elements for _ in range(el.count)], dtype=float)
     k0 = system.expand(system.k0[None, :])[0]
     forces = rows[:, [columns[f"e{k}_f"] for k in range(1, len(b3) + 1)]]
     best, where = 0.0, ""
     # each element's deformation error against its deformation (its force over k0: the rows
-    # compare forces, not deformations)
+    # compare forces, not deformations), and the moment resultant's, in one compiled pass
     du = np.empty(len(b3))
-    kernel("largest_combination")(np.ascontiguousarray(b3, dtype=float), c, np.ascontiguousarray(sn - theta),
-                                  cm1, du)
+    dr = kernel("neglected_terms")(theta, b3, c, np.ascontiguousarray(forces), du)
     scale = largest_abs(forces) / np.maximum(k0, 1e-300)
     with np.errstate(divide="ignore", invalid="ignore"):
         share = np.where(scale > 0, du / scale, 0.0)
     if share.size and share.max() > best:
         best, where = float(share.max()), f"e{int(share.argmax()) + 1}_u"
     key = system.coordinates[rot].key("R")
-    dr = cm1 * (forces @ b3) - sn * (forces @ c)
     top = float(largest_abs(rows[:, [columns[key]]])[0])
-    if top > 0 and np.max(np.abs(dr)) / top > best:
-        best, where = float(np.max(np.abs(dr)) / top), key
+    if top > 0 and dr / top > best:
+        best, where = float(dr / top), key
     for name, x in layout.points:
         keys = [k for k in columns if k.startswith(f"{name}_") and k[len(name) + 1:].startswith("u")]
         top = max(np.max(np.abs(rows[:, columns[k]])) for k in keys) if keys else 0.0

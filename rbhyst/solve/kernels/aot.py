@@ -53,8 +53,8 @@ EXPORTS = {
     "reduce_rows": ("rbhyst.solve.kernels.reduce", "reduce_rows",
                     "void(f8[:,:], i8, i8, f8[::1], f8[::1], f8[::1], f8[::1], f8[:,::1], f8[:,::1], "
                     "f8[::1], f8[::1])"),
-    "largest_combination": ("rbhyst.solve.kernels.reduce", "largest_combination",
-                            "void(f8[::1], f8[::1], f8[::1], f8[::1], f8[::1])"),
+    "neglected_terms": ("rbhyst.solve.kernels.reduce", "neglected_terms",
+                        "f8(f8[::1], f8[::1], f8[::1], f8[:,::1], f8[::1])"),
 }
 
 

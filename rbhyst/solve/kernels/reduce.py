@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 from numba import njit
 
 
@@ -60,17 +62,41 @@ def reduce_rows(table, first, bucket, hi, t_hi, lo, t_lo, b_lo, b_hi, bt_lo, bt_
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
-def largest_combination(a, b, x, y, out):
-    """out[e] = max_t |a[e] x[t] + b[e] y[t]| (0 without rows): each element's largest
-    deformation the small rotations neglect along a run, a = b3, b = the axial offset, x =
-    sin(theta) - theta, y = cos(theta) - 1 (rbhyst.solve.kinematic.model_residual). One pass
-    per element, where numpy made four arrays of every element at every row."""
-    for e in range(a.shape[0]):
-        ae = a[e]
-        be = b[e]
-        top = 0.0
-        for t in range(x.shape[0]):
-            v = abs(ae * x[t] + be * y[t])
-            if v > top:
-                top = v
-        out[e] = top
+def neglected_terms(theta, a, b, forces, top):
+    """The terms the seed's small rotations neglect along a run's rows (rbhyst.solve.kinematic.
+    model_residual), in one pass: top[e] = max_t |a[e] s + b[e] m| (each element's deformation:
+    a = b3, b = its axial offset), and the return value max_t |m sum_e f_e a_e - sin(theta)
+    sum_e f_e b_e| (the moment resultant's; forces (rows, elements)), s = sin(theta) - theta,
+    m = cos(theta) - 1 at each row's theta.
+
+    s and m by their series where |theta| <= 0.25 (the terms left out below 1e-15 of the sum):
+    sin(theta) - theta in floating point loses the digits of theta (half of them at 1e-4 rad),
+    and numpy's sin and cos were most of the check's time."""
+    ne = a.shape[0]
+    for e in range(ne):
+        top[e] = 0.0
+    worst = 0.0
+    for t in range(theta.shape[0]):
+        th = theta[t]
+        q = th * th
+        if q <= 0.0625:
+            s = -th * q * (1.0 / 6.0) * (1.0 - q * (1.0 / 20.0) * (1.0 - q * (1.0 / 42.0) * (
+                1.0 - q * (1.0 / 72.0) * (1.0 - q * (1.0 / 110.0) * (1.0 - q * (1.0 / 156.0))))))
+            m = -q * 0.5 * (1.0 - q * (1.0 / 12.0) * (1.0 - q * (1.0 / 30.0) * (1.0 - q * (1.0 / 56.0) * (
+                1.0 - q * (1.0 / 90.0) * (1.0 - q * (1.0 / 132.0))))))
+        else:
+            s = math.sin(th) - th
+            m = math.cos(th) - 1.0
+        fa = 0.0
+        fb = 0.0
+        for e in range(ne):
+            v = abs(a[e] * s + b[e] * m)
+            if v > top[e]:
+                top[e] = v
+            f = forces[t, e]
+            fa += f * a[e]
+            fb += f * b[e]
+        r = abs(m * fa - (th + s) * fb)
+        if r > worst:
+            worst = r
+    return worst
