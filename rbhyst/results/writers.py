@@ -22,21 +22,20 @@ class CsvWriter:
 
     ``CsvWriter(path)`` is what a run is given; the run calls it with its columns to start the
     file (a run that is repeated, as tolerance mode's ladder does, starts it over), then
-    ``add(rows)`` for every chunk and ``close()``. A chunk is formatted and written by a thread
-    of its own while the caller goes on with the next chunk, the error estimate and the
-    figures: the compiled formatting and the write (most of it the system finding fresh pages
-    for the file) hold no lock of Python's. Two chunks are formatted at once, in two lanes of
-    work arrays and text buffers, and written in turn: formatting (33 ns a value) is slower
-    than the loop that makes the rows, and one thread held a long run's loop back (10^6 steps,
-    540 MB: 3.0-3.2 -> 2.2 s in the process). At most IN_FLIGHT chunks wait their turn (a run
-    faster than its disk waits for it: memory stays bounded); a chunk must not change once
-    added (a run's tables are new for every chunk). A chunk is cut into pieces of about
-    PIECE_VALUES values, each a lane's turn: a run's chunks are of any size (the seed deck's
-    40,001 rows came as 33,333 and 6,668), and one large chunk in one lane left the other core
-    idle while it was formatted (60-90 ms, then 20-25 ms in pieces), its text buffer faulted in
-    afresh at every run. ``close()`` leaves the file to close after
-    its last write; ``wait()`` returns once it has, and raises what a write raised. Whoever
-    gave the run a CsvWriter waits for it before the folder is put in place or removed.
+    ``add(rows)`` for every chunk and ``close()``. A chunk is cut into pieces of PIECE_VALUES
+    values, which two threads of its own (two lanes of work arrays and text buffers) format
+    in turn while the caller goes on with the next chunk, the error estimate and the figures,
+    each piece written after the one before: the compiled formatting and the write (most of it
+    the system finding fresh pages for the file) hold no lock of Python's. Formatting (33 ns a
+    value) is slower than the loop that makes the rows: one thread held a long run's loop back
+    (10^6 steps, 540 MB: 3.0-3.2 -> 2.2 s in the process), and a run's chunks are of any size
+    (the seed deck's 40,001 rows came as 33,333 and 6,668: formatted whole, the large one kept
+    one thread busy while the other core idled, its rows written 60-90 ms after the loop, in
+    pieces 20-40 ms). At most IN_FLIGHT chunks wait their turn (a run faster than its disk waits
+    for it: memory stays bounded); a chunk must not change once added (a run's tables are new
+    for every chunk). ``close()`` leaves the file to close after its last write; ``wait()``
+    returns once it has, and raises what a write raised. Whoever gave the run a CsvWriter waits
+    for it before the folder is put in place or removed.
     """
 
     #: chunks handed to the threads and not yet written

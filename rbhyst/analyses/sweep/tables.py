@@ -110,8 +110,8 @@ def stats_lines(cases: list[Case], vary_keys: list[str], results: dict[str, dict
     Written as text, not as rows for the csv module: a sweep of 10,000 cases has 370,000 rows,
     and a list of cells for each was most of the 2.7 s its tables took after the last case.
     ``known`` (peak_cells): the text of each case's peaks in cases.csv, which a group of one
-    finished case repeats as its mean, median, p84 and max (the same numbers: numpy's of one
-    value is the value), without formatting them again."""
+    finished case repeats as its mean, median, p84 and max without formatting them again, where
+    numpy's statistics of one value are that value (a float, finite, not -0.0)."""
     entries = {c.key: (None if c.problem else results.get(c.key)) for c in cases}
     peaks = [c for c in result_columns(entries.values()) if c.startswith("peak_")]
     groups: dict[tuple, list[Case]] = {}
