@@ -637,6 +637,19 @@ def test_a_batch_given_to_a_pool_whose_worker_just_died_is_lost_with_the_others(
         pool.close(kill=True)
 
 
+def test_a_sweep_with_its_plots_ends_without_the_resource_tracker_s_warning(project):
+    """The lock of the local pool's count of its workers is a semaphore of multiprocessing's: a
+    sweep that drew its plots ended before it was collected, and the resource tracker printed
+    "There appear to be 1 leaked semaphore objects" after every such sweep."""
+    sweep = write_sweep(project, {"deck": "seed_wri.toml", "scale": {"factors": [0.5, 1.0]},
+                                  "vary": {"analysis.duration": [1.0]}})
+    done = subprocess.run([sys.executable, "-m", "rbhyst", "sweep", sweep.name, "--workers", "2"], cwd=project,
+                          capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert (project / "results" / "sweep" / "cases.csv").exists()
+    assert "leaked" not in done.stderr and "Warning" not in done.stderr, done.stderr
+
+
 def free_port() -> int:
     import socket
 

@@ -235,9 +235,11 @@ class LocalPool:
                     writer.close()
         pool.shutdown(wait=True, cancel_futures=True)
         del pool
-        # the pool's queues hold semaphores that only their finalizers release; the command
-        # ends without the interpreter's teardown, and multiprocessing's resource tracker would
-        # warn about them
+        # the pool's queues hold semaphores that only their finalizers release, and so does
+        # the lock of the workers' count (taken): the command ends without the interpreter's
+        # teardown, and multiprocessing's resource tracker warned about what was left at its
+        # end ("1 leaked semaphore", after every sweep that drew its plots)
+        self._taken = None
         gc.collect()
 
 
