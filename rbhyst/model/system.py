@@ -6,6 +6,7 @@ callables of time.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field, replace
 from pathlib import Path
@@ -18,7 +19,7 @@ from rbhyst.model import signals
 from rbhyst.errors import InputError
 from rbhyst.model.body import Body, body_from_deck
 from rbhyst.model.coordinates import PLANE, Coordinate, translations
-from rbhyst.model.hysteresis import limiting_slope, reversal_stiffness
+from rbhyst.model.hysteresis import limiting_slope, reversal_stiffness, virgin_tangent
 from rbhyst.files.units import check_declared
 from rbhyst.model.points import point_matrix
 from rbhyst.model.records import Series, read_record
@@ -738,12 +739,27 @@ def _set_stiffnesses(deck: dk.Deck) -> tuple[dict, dict, dict]:
     sets = {name: hs.array() for name, hs in deck.hysteresis.items()}
     k_rev, k_el = {}, {}
     for name, p in sets.items():
-        k = reversal_stiffness(p, 0.0)
+        k, k_el[name], _ = set_stiffnesses(p)
         if not k > 0.0:
             raise InputError(f"hysteresis.{name}: the stiffness at a reversal at u = 0 is {k:.6g} N/m; it must be > 0")
         k_rev[name] = k
-        k_el[name] = max(float(limiting_slope(p, 1, 0.0)), float(limiting_slope(p, -1, 0.0)), 0.0)
     return sets, k_rev, k_el
+
+
+def set_stiffnesses(p: np.ndarray) -> tuple[float, float, float]:
+    """A set's stiffnesses at u = 0 ((2, 8) parameters): at a reversal, k0 (the larger slope of
+    its limiting curves, at least 0) and the virgin tangent (the stiffer of its two first moves,
+    eq. 16). Of its numbers alone, worked out once per process for each set: a sweep's cases
+    share their sets."""
+    return _set_stiffnesses_of(tuple(p.ravel().tolist()))
+
+
+@functools.lru_cache(maxsize=1024)
+def _set_stiffnesses_of(params: tuple[float, ...]) -> tuple[float, float, float]:
+    p = np.array(params, dtype=float).reshape(2, -1)
+    k_rev = float(reversal_stiffness(p, 0.0))
+    k0 = max(float(limiting_slope(p, 1, 0.0)), float(limiting_slope(p, -1, 0.0)), 0.0)
+    return k_rev, k0, max(virgin_tangent(p, 1.0), virgin_tangent(p, -1.0))
 
 
 def _system(deck: dk.Deck, body, mass, rows, names, mult, elements, excitation, notes, dampers, weight,
