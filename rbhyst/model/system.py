@@ -739,14 +739,14 @@ def _set_stiffnesses(deck: dk.Deck) -> tuple[dict, dict, dict]:
     sets = {name: hs.array() for name, hs in deck.hysteresis.items()}
     k_rev, k_el = {}, {}
     for name, p in sets.items():
-        k, k_el[name], _ = set_stiffnesses(p)
+        k, k_el[name], _ = stiffnesses_at_zero(p)
         if not k > 0.0:
             raise InputError(f"hysteresis.{name}: the stiffness at a reversal at u = 0 is {k:.6g} N/m; it must be > 0")
         k_rev[name] = k
     return sets, k_rev, k_el
 
 
-def set_stiffnesses(p: np.ndarray) -> tuple[float, float, float]:
+def stiffnesses_at_zero(p: np.ndarray) -> tuple[float, float, float]:
     """A set's stiffnesses at u = 0 ((2, 8) parameters): at a reversal, k0 (the larger slope of
     its limiting curves, at least 0) and the virgin tangent (the stiffer of its two first moves,
     eq. 16). Of its numbers alone, worked out once per process for each set: a sweep's cases

@@ -277,7 +277,7 @@ class FixedStepPlan(Plan):
         return x.copy(), st.copy()
 
     def _state_at_rest(self):
-        from rbhyst.model.system import set_stiffnesses
+        from rbhyst.model.system import stiffnesses_at_zero
 
         ne, n = self.bvec.shape
         x = np.zeros(n_x(n))
@@ -286,7 +286,7 @@ class FixedStepPlan(Plan):
         # whatever its direction; until it moves, an element's tangent is the stiffer of its two
         # first moves, so the monitor sees a stiff body at rest before the first step that moves it
         for e in range(ne):
-            st[0, e, kernels.K] = set_stiffnesses(self.params[e])[2]
+            st[0, e, kernels.K] = stiffnesses_at_zero(self.params[e])[2]
         static = self.system.static
         q0 = static.q if static is not None else np.zeros(n)
         p0 = loads_at(self.system.excitation.load(np.zeros(1), self.system.mass), q0[None], n,
