@@ -163,7 +163,7 @@ def test_the_probe_takes_the_compared_rows_of_every_chunk(tmp_path, every):
     run.run(keep=False, tap=tap)
     companion = Companion(planned, tap, every)
     assert isinstance(companion.take, slice)
-    planned.chunk = 7
+    planned.fine_chunk = 7
     moved, _ = companion.probe(0.0)
     assert len(moved[0]) == len(range(0, len(tap.d), every))
     assert all(np.all(m == 0.0) for m in moved)
@@ -199,6 +199,32 @@ def test_the_probe_repeats_the_run_and_moves_a_determined_history_in_proportion(
     assert np.all((1.98 < twice) & (twice < 2.02)), twice
 
 
+def test_a_run_and_its_estimate_do_not_depend_on_where_its_chunks_start(tmp_path):
+    """A shock a third of dt long splits the steps around it in 14 (the compute nodes at k/14
+    of a step, not a binary fraction): the tapped run, its companion and its probe, in one chunk a segment or in
+    chunks of 7 steps, give the same rows and estimate bit for bit (a node's time counts its
+    thirds from t = 0, not from the chunk's start, and a chunk starts on the run's state)."""
+    from rbhyst.results.analysis import analyse, plan, scene
+
+    data = seed_deck(duration=0.4, dt=2e-3)
+    data["excitation"] = {"support": {"x1": {"type": "half-sine", "amplitude": 20.0, "units": "g",
+                                             "duration": 0.0061, "start": 0.0507}}}
+    data["analysis"]["warn_error"] = 1e-4  # (the probe runs too)
+    system, settings = scene(rbhyst.load_deck(write_deck(tmp_path, data)))
+    results = []
+    for chunk in (None, 7):
+        planned = plan(system, settings)
+        assert planned.substeps.max() == 14 and len(planned.bounds) > 2
+        if chunk is not None:
+            planned.fine_chunk = chunk
+        results.append(analyse(system, settings, planned=planned))
+    whole, small = results
+    assert whole.accuracy["companion"]["probe"] > 0
+    np.testing.assert_array_equal(whole.table, small.table)
+    assert whole.accuracy["estimated_error"] == small.accuracy["estimated_error"]
+    assert whole.accuracy["companion"]["spread"] == small.accuracy["companion"]["spread"]
+
+
 @pytest.mark.parametrize("chunk", [None, 7])
 def test_the_companion_reports_its_forces_with_every_turn_where_it_falls(chunk):
     """The companion's rows report each element's force with its turn where it falls, before the
@@ -218,14 +244,15 @@ def test_the_companion_reports_its_forces_with_every_turn_where_it_falls(chunk):
     run = plan.run(keep=False, tap=tap)
     companion = Companion(plan, tap, run.compare_every)
     if chunk is not None:
-        plan.chunk = chunk
+        plan.fine_chunk = chunk
     x, st = plan.initial_state()
     x[x_slice(system.n, 1)] = -companion.offset[0]
     st0 = st[0, :, :6].copy()
     rows = KeptRows(plan.start_row(x, st), len(companion.extra), keep=("u", "f"))
-    for _ in plan.chunks(x, st, fine=True, extra=companion.extra, rot=LOCATED, loads=companion.load,
-                         levels=companion.levels, into=rows):
-        pass
+    load = companion.load.copy()
+    load[:, :system.n] += companion.extra
+    _, levels = plan.step_through(x, st, load, companion.levels, rows, rot=LOCATED)
+    assert np.array_equal(levels, companion.levels)
     ref = np.empty_like(rows.u)
     assert not companion.levels.any()
     assert kernel("redrive")(plan.params, st0, np.ascontiguousarray(rows.u), ref) == -1

@@ -153,6 +153,38 @@ class KeptRows:
         out["fb"] = self.f[node] if "f" in self._keep else np.empty(self._widths["f"])
         return SimpleNamespace(**out)
 
+    def filled(self, node: int, rows: int) -> None:
+        """The loop wrote the rows buffers(node, rows) gave (plan.step_through's hook)."""
+
+
+class PickedRows(KeptRows):
+    """d, v and f at the compute nodes ``take`` only (a slice of them, or their indices in
+    order; node 0 the start row), picked from each chunk's rows once the loop wrote them: the
+    probe's (Companion.probe), which needs no more of a long run."""
+
+    def __init__(self, start, take, count: int):
+        super().__init__(start, 0, keep=())
+        self.take, self.next = take, 1
+        self.d, self.v, self.f = (np.empty((count, w)) for w in (start.d.shape[1], start.v.shape[1], start.f.shape[1]))
+        self.d[0], self.v[0], self.f[0] = start.d[0], start.v[0], start.f[0]
+        self._chunk = None
+
+    def buffers(self, node: int, rows: int):
+        self._chunk = super().buffers(node, rows)
+        return self._chunk
+
+    def filled(self, node: int, rows: int) -> None:
+        take, chunk, k = self.take, self._chunk, self.next
+        if isinstance(take, slice):  # (the compared nodes evenly spaced: the chunk's by arithmetic)
+            first = -(-(node + 1 - take.start) // take.step) * take.step + take.start
+            mine = slice(first - (node + 1), min(node + rows, take.stop - 1) + 1 - (node + 1), take.step)
+        else:
+            mine = _evenly(take[k:np.searchsorted(take, node + rows, side="right")] - (node + 1))
+        part = chunk.d[:rows][mine]
+        j = k + len(part)
+        self.d[k:j], self.v[k:j], self.f[k:j] = part, chunk.v[:rows][mine], chunk.f[:rows][mine]
+        self.next = j
+
 
 class Companion:
     """The run's companion, ready to step: its load (-S at every compute node, none within a step of
@@ -186,22 +218,20 @@ class Companion:
         node: its rows' (kernels.loop, LOCATED), or re-driven between them where the run split
         a step (``redriven``)."""
         plan = self.plan
+        n = plan.system.n
         x, st = plan.initial_state()
-        x[x_slice(plan.system.n, 1)] = -self.offset[0]
+        x[x_slice(n, 1)] = -self.offset[0]
         st0 = st[0].copy()  # (the loop steps st in place)
         split = bool(self.levels.any())  # (then the forces are re-driven between the rows)
         keep = KeptRows(plan.start_row(x, st), len(self.extra), keep=("d", "v", "u" if split else "f"))
-        wall = 0.0
+        load = self.load.copy()
+        load[:, :n] += self.extra
         # every turn put where it falls within its step (LOCATED): the companion's motion then
         # carries none of the run's O(h^2) branch origins, whose drift (a body that creeps under
         # cyclic load) it would otherwise share and cancel
-        node = 0
-        for _, _, _, load, raw, levels, took in plan.chunks(x, st, fine=True, extra=self.extra, rot=LOCATED,
-                                                           loads=self.load, levels=self.levels, into=keep):
-            wall += took
-            if not self._stepped_as_run(levels, node):
-                return None, wall
-            node += len(levels)
+        wall, levels = plan.step_through(x, st, load, self.levels, keep, rot=LOCATED)
+        if not np.array_equal(levels, self.levels):
+            return None, wall
         f = keep.f if not split else redriven(plan.params, st0, keep.u)
         if f is None:
             return None, wall
@@ -214,35 +244,18 @@ class Companion:
         to it, and the kernel seconds: the same stepping as the run's, its turns at the nodes. A
         determined history moves by about eps times its error, a sensitive one by as much as the
         error itself. None where Newton's iterations split a step further than the run's."""
-        plan, rows = self.plan, self.rows
+        plan = self.plan
         n = plan.system.n
         x, st = plan.initial_state()
         x[x_slice(n, 1)] = -eps * self.offset[0]
-        d, v, f = np.empty_like(self.d), np.empty_like(self.v_run), np.empty_like(self.f)
-        d[0], v[0], f[0] = x[x_slice(n, 0)], x[x_slice(n, 1)], st[0, :, F]
-        wall, node, k = 0.0, 0, 1  # node: the compute node before the chunk's first row; k: the next row
-        every = self.take if isinstance(self.take, slice) else None
-        for _, _, _, _, raw, levels, took in plan.chunks(x, st, fine=True, extra=eps * self.extra,
-                                                         loads=self.load, levels=self.levels):
-            wall += took
-            if not self._stepped_as_run(levels, node):
-                return None, wall
-            m = len(raw.t)
-            if every is not None:  # (the compared nodes evenly spaced: the chunk's by arithmetic)
-                first = -(-(node + 1 - every.start) // every.step) * every.step + every.start
-                mine = slice(first - (node + 1), min(node + m, every.stop - 1) + 1 - (node + 1), every.step)
-            else:
-                mine = _evenly(rows[k:np.searchsorted(rows, node + m, side="right")] - (node + 1))
-            part = raw.d[mine]
-            j = k + len(part)
-            d[k:j], v[k:j], f[k:j] = part, raw.v[mine], raw.f[mine]
-            node, k = node + m, j
+        rows = PickedRows(plan.start_row(x, st), self.take, len(self.d))
+        load = self.load.copy()
+        load[:, :n] += eps * self.extra
+        wall, levels = plan.step_through(x, st, load, self.levels, rows)
+        if not np.array_equal(levels, self.levels):
+            return None, wall
+        d, v, f = rows.d, rows.v, rows.f
         return (np.subtract(self.d, d, out=d), np.subtract(self.v_run, v, out=v), np.subtract(self.f, f, out=f)), wall
-
-    def _stepped_as_run(self, levels: np.ndarray, node: int) -> bool:
-        """Whether a chunk's compute steps from ``node`` on took the run's substep levels (only
-        Newton's failure splits a forced step further)."""
-        return np.array_equal(levels, self.levels[node:node + len(levels)])
 
 
 def redriven(params: np.ndarray, st0: np.ndarray, u: np.ndarray) -> np.ndarray | None:

@@ -51,7 +51,8 @@ def compute_times(bounds: np.ndarray, substeps: np.ndarray, dt: float) -> np.nda
     follows its excitation, and at which its response spectra are driven."""
     if len(substeps) == 1 and substeps[0] == 1:  # (every step whole: t_n = n dt, the common case)
         return dt * np.arange(bounds[0] + 1, bounds[1] + 1, dtype=float)
-    parts = [dt * (lo + np.arange(1, (hi - lo) * m + 1) / m)
+    # (k / m of whole steps counted from 0: a node's time does not depend on where a chunk starts)
+    parts = [dt * ((lo * m + np.arange(1, (hi - lo) * m + 1)) / m)
              for lo, hi, m in zip(bounds[:-1], bounds[1:], substeps)]
     return np.concatenate(parts) if parts else np.empty(0)
 
@@ -263,6 +264,10 @@ class FixedStepPlan(Plan):
         ne = self.bvec.shape[0]
         self.layout = Layout(system, s.points)
         self.chunk = min(_chunk_rows(ne, system.n, len(self.layout.names), self.nsub), self.n_steps)
+        # compute-step rows (``fine``) a chunk holds: as many as output steps (the same memory a
+        # row), a short run's in one chunk a segment (a chunk's Python costs some 30 us)
+        self.fine_chunk = min(_chunk_rows(ne, system.n, len(self.layout.names), self.nsub),
+                              int(np.sum(np.diff(self.bounds) * self.substeps)))
         self._initial = None  # (initial_state, computed once)
         # load (or compile) the kernel
         nsub = next(iter(self.coef))
@@ -354,7 +359,7 @@ class FixedStepPlan(Plan):
         """(first output step, steps, substeps each): runs of equal splitting, at most a chunk of
         rows long (of compute-step rows where ``fine``)."""
         for lo, hi, nsub in zip(self.bounds[:-1], self.bounds[1:], self.substeps):
-            chunk = max(1, self.chunk // int(nsub)) if fine else self.chunk
+            chunk = max(1, self.fine_chunk // int(nsub)) if fine else self.chunk
             for k in range(int(lo), int(hi), chunk):
                 yield k, min(chunk, int(hi) - k), int(nsub)
 
@@ -365,36 +370,25 @@ class FixedStepPlan(Plan):
                    u=st[None, 0, :, kernels.U].copy(), f=st[None, 0, :, kernels.F].copy(),
                    e=np.zeros((1, kernels.N_E)))
 
-    def chunks(self, x: np.ndarray, st: np.ndarray, fine: bool = False, extra: np.ndarray | None = None,
-               rot: int | None = None, loads: np.ndarray | None = None, levels: np.ndarray | None = None,
-               into=None):
+    def chunks(self, x: np.ndarray, st: np.ndarray, fine: bool = False, into=None):
         """Step the loop from the state (x, st) to the end, chunk by chunk: yields (first output
         step, output steps, substeps each, the chunk's load at its compute nodes, its rows (every
         compute step where ``fine``), each compute step's substep level, kernel seconds).
-        ``extra`` (compute nodes, n): a load added to the scene's, ``rot`` a kinematics' code
-        other than the system's, ``loads``: the scene's load at every compute node, if a run has
-        built it already, ``levels`` (compute steps,): the substep level each step starts from
-        (the levels a run took: rbhyst.solve.companion). ``into``: where the rows of every
-        compute step go (``fine``), ``into.buffers(node, rows)`` giving a chunk's arrays from
-        its first compute node on (the rows of a whole run kept without a copy: the estimate's
-        tap and companion)."""
+        ``into``: where the rows of every compute step go (``fine``), ``into.buffers(node,
+        rows)`` giving a chunk's arrays from its first compute node on (the rows of a whole run
+        kept without a copy: the estimate's tap)."""
         system, s = self.system, self.settings
         ne, n = self.bvec.shape
         # a chunk of compute-step rows holds at least one output step's substeps (a pulse far
         # shorter than dt splits one step into more rows than a chunk of a short run has)
         if into is None:
-            buf = _Buffers(max(self.chunk, int(self.substeps.max())) if fine else self.chunk, ne, n)
+            buf = _Buffers(max(self.fine_chunk, int(self.substeps.max())) if fine else self.chunk, ne, n)
         node = 0  # the compute node the chunk starts at
         for first, n_out, nsub in self.segments(fine):
-            t_c = s.dt * (first + np.arange(n_out * nsub + 1) / nsub)
-            if loads is None:
-                load = np.ascontiguousarray(system.excitation.load_nodes(t_c, s.dt / nsub, system.mass))
-            else:
-                load = loads[node:node + n_out * nsub + 1].copy()
-            if extra is not None:
-                load[:, :n] += extra[node:node + n_out * nsub + 1]
+            t_c = s.dt * ((first * nsub + np.arange(n_out * nsub + 1)) / nsub)  # (as compute_times)
+            load = np.ascontiguousarray(system.excitation.load_nodes(t_c, s.dt / nsub, system.mass))
             steps = n_out * nsub
-            level = np.empty(steps, dtype=np.int64) if levels is None else levels[node:node + steps].copy()
+            level = np.empty(steps, dtype=np.int64)
             if into is not None:
                 assert fine, "rows kept at every compute step are fine rows"
                 buf = into.buffers(node, steps)
@@ -402,8 +396,8 @@ class FixedStepPlan(Plan):
             sub = nsub if fine else 1
             info = np.zeros(kernels.INFO_SIZE)
             tic = time.perf_counter()
-            written = self._call(load, s.dt * first, nsub, s.dt / nsub, nsub // sub, n_out * sub, x, st, buf, rot,
-                                 level, levels is not None, info)
+            written = self._call(load, s.dt * first, nsub, s.dt / nsub, nsub // sub, n_out * sub, x, st, buf,
+                                 levels=level, info=info)
             wall = time.perf_counter() - tic
             _raise_on_failure(system, s, info)
             assert written == n_out * sub, "the loop wrote fewer rows than asked"
@@ -411,6 +405,32 @@ class FixedStepPlan(Plan):
             m = n_out * sub
             yield first, n_out, nsub, load, Raw(t=t, d=buf.d[:m], v=buf.v[:m], u=buf.u[:m], f=buf.f[:m],
                                                  e=buf.e[:m]), level, wall
+
+    def step_through(self, x: np.ndarray, st: np.ndarray, load: np.ndarray, levels: np.ndarray, rows,
+                     rot: int | None = None) -> tuple[float, np.ndarray]:
+        """Step the loop from the state (x, st) to the end as a run stepped: each compute step at
+        the substep level ``levels`` holds (a run's, as it took them; only Newton's failure
+        splits a step further), under ``load`` at every compute node, a row after every step.
+        ``rows.buffers(node, steps)`` gives the arrays a chunk's rows go into, from compute node
+        ``node`` + 1 on, and ``rows.filled(node, steps)`` hears they are there (the estimate's
+        companion and its probe: rbhyst.solve.companion). ``rot``: a kinematics' code other than
+        the system's. Returns the kernel seconds and the levels the steps took."""
+        s = self.settings
+        taken = levels.copy()
+        info = np.zeros(kernels.INFO_SIZE)
+        wall, node = 0.0, 0
+        for first, n_out, nsub in self.segments(fine=True):
+            steps = n_out * nsub
+            buf = rows.buffers(node, steps)
+            tic = time.perf_counter()
+            written = self._call(load[node:node + steps + 1], s.dt * first, nsub, s.dt / nsub, 1, steps, x, st, buf,
+                                 rot, taken[node:node + steps], True, info)
+            wall += time.perf_counter() - tic
+            _raise_on_failure(self.system, s, info)
+            assert written == steps, "the loop wrote fewer rows than asked"
+            rows.filled(node, steps)
+            node += steps
+        return wall, taken
 
     def run(self, keep: bool = True, csv=None, compare_every: int | None = None, progress=None,
             tap=None) -> Result:
