@@ -44,6 +44,7 @@ where its estimate exceeds 20 %, the estimate is the adaptive solutions' (rbhyst
 from __future__ import annotations
 
 import time
+from types import SimpleNamespace
 
 import numpy as np
 
@@ -139,8 +140,6 @@ class KeptRows:
         """The arrays the loop writes a chunk's rows into, from compute node ``node`` + 1 on, and
         ``fb``, the row of forces before them (the loop patches a turn the chunk's first step
         put before it: kernels.loop's out_fb)."""
-        from types import SimpleNamespace
-
         out = {}
         for k, width in self._widths.items():
             if k in self._keep:
@@ -179,7 +178,7 @@ class PickedRows(KeptRows):
             first = -(-(node + 1 - take.start) // take.step) * take.step + take.start
             mine = slice(first - (node + 1), min(node + rows, take.stop - 1) + 1 - (node + 1), take.step)
         else:
-            mine = _evenly(take[k:np.searchsorted(take, node + rows, side="right")] - (node + 1))
+            mine = take[k:np.searchsorted(take, node + rows, side="right")] - (node + 1)
         part = chunk.d[:rows][mine]
         j = k + len(part)
         self.d[k:j], self.v[k:j], self.f[k:j] = part, chunk.v[:rows][mine], chunk.f[:rows][mine]

@@ -122,15 +122,27 @@ def column_errors(values: np.ndarray, ref: np.ndarray, keys, families, system: S
 
 def relative_to_peaks(diff: np.ndarray, peak: np.ndarray, keys, families, system: System) -> np.ndarray:
     """column_errors from each column's largest difference and the reference's peak."""
+    return scaled_errors(diff, error_scales(peak, keys, families, system))
+
+
+def scaled_errors(diff: np.ndarray, scales: np.ndarray) -> np.ndarray:
+    """Each column's largest difference over its error_scales: inf where the scale is 0 and the
+    difference is not, 0 where both are."""
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return np.where(scales > 0, diff / scales, np.where(diff > 0, np.inf, 0.0))
+
+
+def error_scales(peak: np.ndarray, keys, families, system: System) -> np.ndarray:
+    """What column_errors divides each column's largest difference by, from the reference's
+    peaks: the peak, or the family's scale where the column is at rest, NEGLIGIBLE x the scale
+    where it is below that."""
     length = _to_length(keys, system)
     index: dict = {}
     family = np.array([index.setdefault(f, len(index)) for f in families], dtype=np.intp)
     top = np.zeros(len(index))
     np.maximum.at(top, family, peak * length)  # each family's largest peak, in its measure
     scale = top[family] / length
-    denom = np.where(peak > AT_REST * scale, np.maximum(peak, NEGLIGIBLE * scale), scale)
-    with np.errstate(invalid="ignore", divide="ignore"):
-        return np.where(denom > 0, diff / denom, np.where(diff > 0, np.inf, 0.0))
+    return np.where(peak > AT_REST * scale, np.maximum(peak, NEGLIGIBLE * scale), scale)
 
 
 def _peak_spread(keys, *histories: np.ndarray) -> dict[str, float]:
@@ -334,7 +346,8 @@ def _from_companion(result, settings, plan, tap, spare_core: bool = False) -> di
     # change of a relative error)
     extremes, columns = result.extremes, [c for _, c, _ in cols]
     peaks = np.maximum(np.abs(extremes.max[columns]), np.abs(extremes.min[columns]))
-    err = relative_to_peaks(changed, peaks, keys, families, result.system)
+    scales = error_scales(peaks, keys, families, result.system)
+    err = scaled_errors(changed, scales)
     info = {"steps": int(stats.steps_taken), "wall_s": wall}
     if max(err, default=0.0) > COMPANION_LARGEST:
         return None
@@ -345,7 +358,7 @@ def _from_companion(result, settings, plan, tap, spare_core: bool = False) -> di
         moved, took = checked if checked is not None else probe()
         if moved is None:
             return None
-        spread = relative_to_peaks(moved, peaks, keys, families, result.system)
+        spread = scaled_errors(moved, scales)
         info.update(wall_s=wall + took, probe=COMPANION_PROBE, spread=float(max(spread, default=0.0)))
         if info["spread"] > settings.warn_error:
             return None

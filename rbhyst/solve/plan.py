@@ -269,7 +269,13 @@ class FixedStepPlan(Plan):
         self.fine_chunk = min(_chunk_rows(ne, system.n, len(self.layout.names), self.nsub),
                               int(np.sum(np.diff(self.bounds) * self.substeps)))
         self._initial = None  # (initial_state, computed once)
-        # load (or compile) the kernel
+        from rbhyst.solve.kernels.compiled import kernel
+
+        # the loop for n coordinates, loaded (or compiled) once, and M and M^-1 as tuples: their
+        # length n is then a constant of the compiled loop (one compilation per n), which
+        # unrolls every loop over the coordinates
+        self._loop = kernel("run_chunk", self.bvec.shape[1])
+        self._mass, self._minv = tuple(system.mass), tuple(self.minv)
         nsub = next(iter(self.coef))
         self._call(np.zeros((1, system.n)), 0.0, nsub, s.dt / nsub, nsub, 0, *self.initial_state(), _Buffers(1, ne, system.n))
 
@@ -312,8 +318,6 @@ class FixedStepPlan(Plan):
         step's substep level; with ``force`` each step takes the level it holds. ``info``
         (kernels.INFO_SIZE,): receives how the loop ended, the caller's own (two threads may
         step one plan: an estimate's companion and its probe)."""
-        from rbhyst.solve.kernels.compiled import kernel
-
         s = self.settings
         ne, n_q = self.bvec.shape
         if n > len(buf.d):  # the compiled loop checks no bounds: never let it write past a buffer
@@ -324,17 +328,13 @@ class FixedStepPlan(Plan):
             levels = np.empty(n * rows_every, dtype=np.int64)
         if len(levels) < n * rows_every:
             raise RuntimeError(f"{len(levels)} levels for a chunk of {n * rows_every} compute steps")
-        # M and M^-1 as tuples: their length n is then a constant of the compiled loop (one
-        # compilation per n), which unrolls every loop over the coordinates
-        return kernel("run_chunk", n_q)(self.method.kernel_id, self.coef[nsub], tuple(self.system.mass), tuple(self.minv),
-                                        self.cm, self.damped,
-                                        self.bvec, self.axial, self.system.rotation_index if rot is None else rot,
-                                        self.system.mult,
-                                        self.params, self.wgt, load,
-                                        t0, h_c, rows_every, n, s.max_omega_dt, self.level0[nsub], s.max_substep_level,
-                                        s.newton_tol, s.newton_max_iter, x, st, np.zeros((ne, N_STATE)), np.zeros((ne, 2)),
-                                        np.zeros((ne, n_q)), np.zeros((N_W, n_q)), np.zeros((n_q, n_q)), buf.d, buf.v, buf.u, buf.f, buf.e,
-                                        buf.fb, levels, force, info)
+        return self._loop(self.method.kernel_id, self.coef[nsub], self._mass, self._minv, self.cm, self.damped,
+                          self.bvec, self.axial, self.system.rotation_index if rot is None else rot, self.system.mult,
+                          self.params, self.wgt, load,
+                          t0, h_c, rows_every, n, s.max_omega_dt, self.level0[nsub], s.max_substep_level,
+                          s.newton_tol, s.newton_max_iter, x, st, np.zeros((ne, N_STATE)), np.zeros((ne, 2)),
+                          np.zeros((ne, n_q)), np.zeros((N_W, n_q)), np.zeros((n_q, n_q)), buf.d, buf.v, buf.u, buf.f, buf.e,
+                          buf.fb, levels, force, info)
 
     def compute_nodes(self, levels: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(t, h, out): every compute node's time from 0, the step the loop takes after it
