@@ -345,3 +345,31 @@ def test_the_adaptive_solutions_take_over_where_the_companion_does_not_apply(tmp
         data["analysis"].update(dt=0.005, warn_error=1e-6)
     res = rbhyst.run(write_deck(tmp_path, data), integrator=integrator)
     assert "companion" not in res.accuracy and res.accuracy["reference"]["rtol"] == pytest.approx(1e-9)
+
+
+def test_the_largest_change_of_every_column_is_the_table_s_own_difference(tmp_path):
+    """What the companion compares (history.Layout.largest_change of changes of the coordinates,
+    velocities and forces) is the largest difference of every estimate column of the two
+    tables, points and Rayleigh damping included: the table is linear in them with small
+    rotations (the load and the support cancel)."""
+    from rbhyst.solve.history import Raw, estimate_columns, largest_abs
+
+    data = seed_deck(duration=0.5)
+    data["damping"] = {"rayleigh": {"ratio": 0.05, "modes": [1, 3]}}
+    data["output"] = {"points": [{"name": "top", "point": [0.0, 2.0]}, {"name": "corner", "point": [0.8, 0.0]}]}
+    res = rbhyst.run(write_deck(tmp_path, data), estimate=False)
+    layout = res.layout
+    assert layout.damped and len(layout.points) == 2
+    rng = np.random.default_rng(5)
+    rows, n, ne = 301, 3, layout.system.bvec.shape[0]
+    t = np.linspace(0.0, 0.3, rows)
+    d, v, f = rng.normal(size=(rows, n)) * 1e-3, rng.normal(size=(rows, n)) * 1e-2, rng.normal(size=(rows, ne)) * 1e3
+    dd, dv, df = rng.normal(size=d.shape) * 1e-6, rng.normal(size=v.shape) * 1e-5, rng.normal(size=f.shape)
+    u, e = np.zeros((rows, ne)), np.zeros((rows, 4))
+    one = layout.table(Raw(t, d, v, u, f, e))
+    two = layout.table(Raw(t, d - dd, v - dv, u, f - df, e))
+    index = [c for _, c, _ in estimate_columns(layout)]
+    want = largest_abs(one[:, index] - two[:, index])
+    got = layout.largest_change(dd, dv, df)
+    assert got.shape == want.shape and len(got) > 3 * n + 8
+    np.testing.assert_allclose(got, want, rtol=1e-7)

@@ -194,11 +194,17 @@ class Layout:
         dat *= self._minv
         if self._back is not None:
             dd, dr, dat = dd @ self._back, dr @ self._back, dat @ self._back
-        out = [largest_abs(dd), largest_abs(dat), largest_abs(dr)]
-        for _, x in self.points:
-            out.append(largest_abs(point_motion(dd, dat, x, coordinates=self.coordinates)))
-        out.append(largest_abs(df)[self._expand])
-        return np.concatenate(out)
+        # every column's changes side by side, each contiguous (one pass finds the largest)
+        n, width = dd.shape[1], self._point_width
+        body = 3 * n + width * len(self.points)
+        cols = np.empty((body + df.shape[1], len(dd))).T
+        cols[:, :n], cols[:, n:2 * n], cols[:, 2 * n:3 * n] = dd, dat, dr
+        for k, (_, x) in enumerate(self.points):
+            point_motion(dd, dat, x, out=cols[:, 3 * n + width * k:3 * n + width * (k + 1)],
+                         coordinates=self.coordinates)
+        cols[:, body:] = df
+        top = largest_abs(cols)
+        return np.concatenate([top[:body], top[body:][self._expand]])
 
     def _rest(self, raw: Raw, out: np.ndarray, at: np.ndarray, omega=None) -> None:
         """The columns after G's motion, resultant and total acceleration (in the deck's axes in
