@@ -235,6 +235,9 @@ class Companion:
         if f is None:
             return None, wall
         rows = self.take
+        if isinstance(rows, slice):  # (views of the companion's rows: the differences in place)
+            d, v, f = keep.d[rows], keep.v[rows], f[rows]
+            return (np.subtract(self.d, d, out=d), np.subtract(self.v, v, out=v), np.subtract(self.f, f, out=f)), wall
         return (self.d - keep.d[rows], self.v - keep.v[rows], self.f - f[rows]), wall
 
     def probe(self, eps: float):
@@ -247,7 +250,11 @@ class Companion:
         n = plan.system.n
         x, st = plan.initial_state()
         x[x_slice(n, 1)] = -eps * self.offset[0]
-        rows = PickedRows(plan.start_row(x, st), self.take, len(self.d))
+        start = plan.start_row(x, st)
+        if isinstance(self.take, slice) and self.take.step == 1:  # every node compared: kept as written
+            rows = KeptRows(start, len(self.d))
+        else:
+            rows = PickedRows(start, self.take, len(self.d))
         load = self.load.copy()
         load[:, :n] += eps * self.extra
         wall, levels = plan.step_through(x, st, load, self.levels, rows)

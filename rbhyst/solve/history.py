@@ -51,6 +51,10 @@ class Raw:
         return Raw(*(getattr(self, k)[start:stop:step] for k in ("t", "d", "v", "u", "f", "e")))
 
 
+#: rows of changes Layout.largest_change takes at a time
+CHANGE_ROWS = 8192
+
+
 def largest_abs(x: np.ndarray) -> np.ndarray:
     """max_t |x| of every column of (rows, k): column by column in memory (numpy reduces a
     C-ordered array of a few columns down its rows some thirty times slower), no |x| array."""
@@ -187,23 +191,30 @@ class Layout:
         rotations (the load, the support and the origin cancel). What the error estimate's
         companion compares (rbhyst.solve.companion)."""
         assert self._rot == SMALL, "the table is linear in the state only with small rotations"
-        dr = df @ self._rb
-        dat = -dr
-        if self.damped:
-            dat -= dv @ self._ct
-        dat *= self._minv
-        if self._back is not None:
-            dd, dr, dat = dd @ self._back, dr @ self._back, dat @ self._back
-        # every column's changes side by side, each contiguous (one pass finds the largest)
         n, width = dd.shape[1], self._point_width
         body = 3 * n + width * len(self.points)
-        cols = np.empty((body + df.shape[1], len(dd))).T
-        cols[:, :n], cols[:, n:2 * n], cols[:, 2 * n:3 * n] = dd, dat, dr
-        for k, (_, x) in enumerate(self.points):
-            point_motion(dd, dat, x, out=cols[:, 3 * n + width * k:3 * n + width * (k + 1)],
-                         coordinates=self.coordinates)
-        cols[:, body:] = df
-        top = largest_abs(cols)
+        rows = len(dd)
+        block = max(1, min(rows, CHANGE_ROWS))
+        # every column's changes side by side, each contiguous, CHANGE_ROWS rows at a time: one
+        # pass finds the largest, and a long run's changes are not copied whole
+        cols = np.empty((body + df.shape[1], block)).T
+        top = np.zeros(body + df.shape[1])
+        for s in range(0, rows, block):
+            e = min(rows, s + block)
+            d, c = dd[s:e], cols[:e - s]
+            dr = df[s:e] @ self._rb
+            dat = -dr
+            if self.damped:
+                dat -= dv[s:e] @ self._ct
+            dat *= self._minv
+            if self._back is not None:
+                d, dr, dat = d @ self._back, dr @ self._back, dat @ self._back
+            c[:, :n], c[:, n:2 * n], c[:, 2 * n:3 * n] = d, dat, dr
+            for k, (_, x) in enumerate(self.points):
+                point_motion(d, dat, x, out=c[:, 3 * n + width * k:3 * n + width * (k + 1)],
+                             coordinates=self.coordinates)
+            c[:, body:] = df[s:e]
+            np.maximum(top, largest_abs(c), out=top)
         return np.concatenate([top[:body], top[body:][self._expand]])
 
     def _rest(self, raw: Raw, out: np.ndarray, at: np.ndarray, omega=None) -> None:
