@@ -17,6 +17,7 @@ from rbhyst.model.coordinates import PLANE, columns, translations
 from rbhyst.model.kinematics import SPATIAL, point_motion_exact, turned_loads
 from rbhyst.solve.kernels.layout import SMALL
 from rbhyst.model.points import point_columns, point_motion
+from rbhyst.model.system import FORCE_SIGNALS
 
 
 def base_columns(coordinates=PLANE) -> tuple[str, ...]:
@@ -74,6 +75,8 @@ class Layout:
         coords = system.coordinates
         n = len(coords)
         self.has_support = ex.has_support
+        # whether external forces act (signals or a constant load): without, a row's forces are 0
+        self._forced = any(k in FORCE_SIGNALS for k in ex.signals) or any(c != 0.0 for c in ex.constant)
         self.dampers = bool(system.dampers)  # their columns
         self._turning = False
         # viscous work (and C v in the accelerations) with dampers or Rayleigh damping
@@ -161,10 +164,13 @@ class Layout:
         # holds the force's value on its span). Not the integrator's own acceleration, which
         # near a jump or a kink carries the load averaged over a step.
         at = out[:, self.slices["at"]]
-        forces = self.system.excitation.forces(raw.t)
-        if forces.shape[1] > len(self.coordinates):  # forces whose arm turns (exact kinematics)
-            forces = turned_loads(forces, raw.d[:, self._rot], len(self.coordinates), self._rot)
-        at[:] = forces - r
+        if self._forced:
+            forces = self.system.excitation.forces(raw.t)
+            if forces.shape[1] > len(self.coordinates):  # forces whose arm turns (exact kinematics)
+                forces = turned_loads(forces, raw.d[:, self._rot], len(self.coordinates), self._rot)
+            at[:] = forces - r
+        else:  # (support motion alone: 0 - R, +0.0 where R is 0, as a zero force minus R gives)
+            np.subtract(0.0, r, out=at)
         if self.damped:
             at -= self._viscous(raw)
         at *= self._minv
