@@ -49,7 +49,7 @@ from types import SimpleNamespace
 import numpy as np
 
 from rbhyst.model.kinematics import loads_at
-from rbhyst.solve.kernels.layout import F, LOCATED, MODIFIED, SMALL, x_slice
+from rbhyst.solve.kernels.layout import LOCATED, MODIFIED, SMALL, x_slice
 
 #: the methods whose modified equation is written out here
 METHODS = tuple(MODIFIED)

@@ -14,6 +14,7 @@ import numpy as np
 
 from rbhyst.solve import integrators
 from rbhyst.solve.kernels import layout as kernels
+from rbhyst.solve.kernels.compiled import kernel
 from rbhyst.errors import AnalysisError, InputError, byte_size
 from rbhyst.solve.history import Extremes, Layout, PlotData, Raw, body_spectrum_columns, estimate_columns
 from rbhyst.solve.kernels.layout import N_STATE, N_W, X_CUR, X_ITER, X_LEVEL_USED, X_OMEGA_DT2, X_STEPS, X_SUBSTEPS, n_x, x_slice
@@ -263,14 +264,12 @@ class FixedStepPlan(Plan):
         # (in space with exact rotations the loop rewrites it at every step from the rows it reached)
         ne = self.bvec.shape[0]
         self.layout = Layout(system, s.points)
-        self.chunk = min(_chunk_rows(ne, system.n, len(self.layout.names), self.nsub), self.n_steps)
-        # compute-step rows (``fine``) a chunk holds: as many as output steps (the same memory a
-        # row), a short run's in one chunk a segment (a chunk's Python costs some 30 us)
-        self.fine_chunk = min(_chunk_rows(ne, system.n, len(self.layout.names), self.nsub),
-                              int(np.sum(np.diff(self.bounds) * self.substeps)))
+        per_chunk = _chunk_rows(ne, system.n, len(self.layout.names), self.nsub)
+        self.chunk = min(per_chunk, self.n_steps)
+        # compute-step rows (``fine``) a chunk holds: as many as the memory bound allows, so that
+        # a short run takes one call of the loop a segment (a chunk's Python costs some 30 us)
+        self.fine_chunk = min(per_chunk, int(np.sum(np.diff(self.bounds) * self.substeps)))
         self._initial = None  # (initial_state, computed once)
-        from rbhyst.solve.kernels.compiled import kernel
-
         # the loop for n coordinates, loaded (or compiled) once, and M and M^-1 as tuples: their
         # length n is then a constant of the compiled loop (one compilation per n), which
         # unrolls every loop over the coordinates
