@@ -153,7 +153,7 @@ def prepare(system: System, s: Settings) -> "Plan":
     run needs before it writes anything."""
     method = integrators.get(s.integrator)
     system = at_rest_under_gravity(system)
-    n_steps, nsub = grid(system, s)
+    n_steps = output_steps(system, s)
     if n_steps < s.every:
         raise InputError(f"output.every: {s.every} is more than the {n_steps} steps of the analysis")
     if method.solve is not None:
@@ -178,7 +178,10 @@ class Plan:
 
     def __init__(self, system: System, s: Settings, method):
         self.system, self.settings, self.method = system, s, method
-        self.n_steps, self.nsub = grid(system, s)
+        self.n_steps = output_steps(system, s)
+        # runs of output steps split alike (Excitation.substeps), and the most compute steps a step
+        self.bounds, self.substeps = system.excitation.substeps(s.dt, self.n_steps)
+        self.nsub = int(self.substeps.max())
 
     def check_size(self, keep: bool, folder=None) -> list[str]:
         """Refuse, before anything runs, what cannot fit: rows kept in memory beyond
@@ -242,7 +245,6 @@ class FixedStepPlan(Plan):
         self.minv = 1.0 / mass
         self.cm = np.ascontiguousarray(system.kernel_damping)  # (C, and turning dampers' rows: exact kinematics)
         self.damped = bool(np.any(self.cm != 0.0))
-        self.bounds, self.substeps = system.excitation.substeps(s.dt, self.n_steps)
         k0 = system.K0
         self.coef, self.level0 = {}, {}
         for nsub in np.array(sorted(set(self.substeps.tolist())), dtype=np.int64):  # (np.unique imports numpy.ma)
