@@ -87,6 +87,12 @@ class Excitation:
         return self.ag1 is not None or self.ag2 is not None or self.ag3 is not None
 
     @property
+    def has_forces(self) -> bool:
+        """Whether external forces act on the body: a force or moment signal, or a constant load
+        (the weight): without them ``forces`` is zero at every time."""
+        return any(k in FORCE_SIGNALS for k in self.signals) or any(c != 0.0 for c in self.constant)
+
+    @property
     def signals(self) -> dict[str, Signal]:
         return {k: s for k, s in (("ag1", self.ag1), ("ag2", self.ag2), ("p1", self.p1), ("p2", self.p2),
                                   ("m3", self.m3), ("ag3", self.ag3), ("p3", self.p3), ("m1", self.m1),

@@ -17,7 +17,6 @@ from rbhyst.model.coordinates import PLANE, columns, translations
 from rbhyst.model.kinematics import SPATIAL, point_motion_exact, turned_loads
 from rbhyst.solve.kernels.layout import SMALL
 from rbhyst.model.points import point_columns, point_motion
-from rbhyst.model.system import FORCE_SIGNALS
 
 
 def base_columns(coordinates=PLANE) -> tuple[str, ...]:
@@ -75,8 +74,7 @@ class Layout:
         coords = system.coordinates
         n = len(coords)
         self.has_support = ex.has_support
-        # whether external forces act (signals or a constant load): without, a row's forces are 0
-        self._forced = any(k in FORCE_SIGNALS for k in ex.signals) or any(c != 0.0 for c in ex.constant)
+        self._forced = ex.has_forces  # (without, a row's forces are 0)
         self.dampers = bool(system.dampers)  # their columns
         self._turning = False
         # viscous work (and C v in the accelerations) with dampers or Rayleigh damping
