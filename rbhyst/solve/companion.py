@@ -77,25 +77,26 @@ def unfit(plan) -> str | None:
 
 
 class RunTap:
-    """A run's tap (plan.run): at every compute step its coordinates, velocities and element
-    forces, and the method's own acceleration A = M^-1 (p - R - C V) at the nodes, the load as
-    the loop took it, in arrays of the whole run (its compute nodes are known before it runs:
-    the stiffness monitor splits a step within it, not into more rows). The loop writes the
-    rows straight into them (``buffers``): no copy."""
+    """A run's tap (plan.run): at every compute step its time, coordinates, velocities and element
+    forces, and the load as the loop took it, in arrays of the whole run (its compute nodes are
+    known before it runs: the stiffness monitor splits a step within it, not into more rows);
+    the method's own acceleration A = M^-1 (p - R - C V) at the nodes from them once it ran
+    (``accelerations``). The loop writes the rows straight into them (``buffers``): no copy."""
 
     def __init__(self, plan):
         self.minv = plan.minv
         self.layout = plan.layout
         self.rot = plan.system.rotation_index
         self.c = plan.cm[:plan.system.n] if plan.damped else None
-        n, ne = plan.system.n, plan.bvec.shape[0]
+        n = plan.system.n
         nodes = int(np.sum(np.diff(plan.bounds) * plan.substeps)) + 1
         x, st = plan.initial_state()
         start = plan.start_row(x, st)
-        self.a = np.empty((nodes, n))
         self._rows = KeptRows(start, nodes)  # d, v, f at every node; u and e a chunk's at a time
-        self.a[0] = x[x_slice(n, 2)]
+        self._a0 = x[x_slice(n, 2)].copy()  # (the loop's own at t = 0: equilibrium under the load)
         self.d, self.v, self.f = self._rows.d, self._rows.v, self._rows.f
+        self.t = np.empty(nodes)  # every compute node's time, as the loop took it
+        self.t[0] = 0.0
         self.load = None  # the scene's load at every compute node (the companion's, less its source)
         self.levels = np.empty(nodes - 1, dtype=np.int64)  # every compute step's substep level (the monitor's)
         self.next = 1  # the next node to fill
@@ -106,26 +107,35 @@ class RunTap:
 
     def __call__(self, load: np.ndarray, raw, levels: np.ndarray) -> None:
         tic = time.perf_counter()
-        n = len(self.minv)
         k, m = self.next, len(raw.t)
         assert np.may_share_memory(raw.d, self.d[k:k + m]), "the rows are written into the tap's arrays"
         if self.load is None:
-            self.load = np.empty((len(self.a), load.shape[1]))
+            self.load = np.empty((len(self.t), load.shape[1]))
             self.load[0] = load[0]
-        force = loads_at(load[1:], raw.d, n, self.rot) - self.layout.restoring(raw.f, raw.d)
-        if self.c is not None:
-            force -= raw.v @ self.c.T
-        np.multiply(force, self.minv, out=self.a[k:k + m])
         self.load[k:k + m] = load[1:]  # (chunks share their first node)
+        self.t[k:k + m] = raw.t
         self.levels[k - 1:k - 1 + m] = levels
         self.next = k + m
         self.wall_s += time.perf_counter() - tic
 
+    def accelerations(self) -> np.ndarray:
+        """(nodes, n) the method's acceleration A = M^-1 (p - R - C V) at every node, from the
+        rows and the load the run left (node 0: the loop's own, at rest under the load)."""
+        n = len(self.minv)
+        a = np.empty((len(self.t), n))
+        a[0] = self._a0
+        d, v, f = self.d[1:], self.v[1:], self.f[1:]
+        force = loads_at(self.load[1:], d, n, self.rot) - self.layout.restoring(f, d)
+        if self.c is not None:
+            force -= v @ self.c.T
+        np.multiply(force, self.minv, out=a[1:])
+        return a
+
 
 class KeptRows:
-    """Rows of every compute node from the start row on, which the loop writes into (plan.chunks'
-    ``into``): those of ``keep`` (d, v, u, f) in arrays of them all, the others a chunk's at a
-    time."""
+    """Rows of every compute node from the start row on, which the loop writes into: those of
+    ``keep`` (d, v, u, f) in arrays of them all, the others a chunk's at a time (plan.chunks'
+    ``into``, ``buffers``; plan.step_through's ``arrays``)."""
 
     def __init__(self, start, nodes: int, keep=("d", "v", "f")):
         self._widths = {k: getattr(start, k).shape[1] for k in ("d", "v", "u", "f", "e")}
@@ -152,37 +162,32 @@ class KeptRows:
         out["fb"] = self.f[node] if "f" in self._keep else np.empty(self._widths["f"])
         return SimpleNamespace(**out)
 
-    def filled(self, node: int, rows: int) -> None:
-        """The loop wrote the rows buffers(node, rows) gave (plan.step_through's hook)."""
+    def arrays(self, scratch: int):
+        """plan.step_through's arrays (kernels.through): d, v, u, f (those kept of every node,
+        the others ``scratch`` rows), e and fb (scratch), which are whole, and no nodes to pick."""
+        out = [getattr(self, k) if k in self._keep else np.empty((scratch, self._widths[k])) for k in "dvuf"]
+        whole = np.array([k in self._keep for k in "dvuf"])
+        none = np.empty((1, 0))
+        return (*out, np.empty((scratch, self._widths["e"])), np.empty(self._widths["f"]), whole,
+                np.empty(0, dtype=np.int64), none, none, none)
 
 
 class PickedRows(KeptRows):
     """d, v and f at the compute nodes ``take`` only (a slice of them, or their indices in
-    order; node 0 the start row), picked from each chunk's rows once the loop wrote them: the
+    order; node 0 the start row), picked from each segment's rows as the loop writes them: the
     probe's (Companion.probe), which needs no more of a long run."""
 
     def __init__(self, start, take, count: int):
         super().__init__(start, 0, keep=())
-        self.take, self.next = take, 1
+        self.take = take
         self.d, self.v, self.f = (np.empty((count, w)) for w in (start.d.shape[1], start.v.shape[1], start.f.shape[1]))
         self.d[0], self.v[0], self.f[0] = start.d[0], start.v[0], start.f[0]
-        self._chunk = None
 
-    def buffers(self, node: int, rows: int):
-        self._chunk = super().buffers(node, rows)
-        return self._chunk
-
-    def filled(self, node: int, rows: int) -> None:
-        take, chunk, k = self.take, self._chunk, self.next
-        if isinstance(take, slice):  # (the compared nodes evenly spaced: the chunk's by arithmetic)
-            first = -(-(node + 1 - take.start) // take.step) * take.step + take.start
-            mine = slice(first - (node + 1), min(node + rows, take.stop - 1) + 1 - (node + 1), take.step)
-        else:
-            mine = take[k:np.searchsorted(take, node + rows, side="right")] - (node + 1)
-        part = chunk.d[:rows][mine]
-        j = k + len(part)
-        self.d[k:j], self.v[k:j], self.f[k:j] = part, chunk.v[:rows][mine], chunk.f[:rows][mine]
-        self.next = j
+    def arrays(self, scratch: int):
+        take = self.take
+        nodes = np.arange(take.start, take.stop, take.step) if isinstance(take, slice) else np.asarray(take)
+        out = super().arrays(scratch)
+        return (*out[:7], np.ascontiguousarray(nodes[1:], dtype=np.int64), self.d, self.v, self.f)
 
 
 class Companion:
@@ -192,17 +197,17 @@ class Companion:
     def __init__(self, plan, tap: RunTap, compare_every: int):
         system, s = plan.system, plan.settings
         self.plan = plan
-        assert tap.next == len(tap.a), "the run's tap missed compute steps"
-        a, v = tap.a, tap.v
+        assert tap.next == len(tap.t), "the run's tap missed compute steps"
+        a, v = tap.accelerations(), tap.v
         # the steps the run's stiffness monitor split are the companion's too (its source is the
         # method's error at the substeps' h)
         self.levels = tap.levels
-        t, h, out_nodes = plan.compute_nodes(self.levels)
+        t, h, out_nodes = plan.compute_nodes(self.levels, t=tap.t)
         self.extra, self.offset = source_and_offset(s.integrator, a, v, t, h, system.mass, tap.c, system.K0,
-                                                    _near_breaks(system.excitation, t, h))
+                                                    _near_breaks(system.excitation, t, h, s.dt))
         # the run at the compared steps, its velocities read on its curve
         self.rows = out_nodes[::compare_every]
-        self.take = _evenly(self.rows)
+        self.take = _evenly(self.rows, len(set(plan.substeps.tolist())) == 1)
         self.d, self.v_run = tap.d[self.take], v[self.take]
         self.v = self.v_run - self.offset[self.take]
         self.f = tap.f[self.take]
@@ -297,20 +302,23 @@ def source_and_offset(method: str, a: np.ndarray, v: np.ndarray, t: np.ndarray, 
     return extra, offset
 
 
-def _evenly(rows: np.ndarray):
-    """The nodes ``rows`` as a slice where they are evenly spaced (a view, not a gather)."""
-    if len(rows) > 1 and rows[1] > rows[0] and np.all(np.diff(rows) == rows[1] - rows[0]):
+def _evenly(rows: np.ndarray, even: bool = False):
+    """The nodes ``rows`` as a slice where they are evenly spaced (a view, not a gather); ``even``:
+    they are known to be (every output step has as many compute steps)."""
+    if len(rows) > 1 and rows[1] > rows[0] and (even or np.all(np.diff(rows) == rows[1] - rows[0])):
         return slice(int(rows[0]), int(rows[-1]) + 1, int(rows[1] - rows[0]))
     return rows
 
 
-def _near_breaks(excitation, t: np.ndarray, h: np.ndarray) -> np.ndarray:
-    """The nodes within a step of an analytic signal's start, end or corner."""
+def _near_breaks(excitation, t: np.ndarray, h: np.ndarray, dt: float) -> np.ndarray:
+    """The nodes t (ascending) within a step h of an analytic signal's start, end or corner (no
+    step is longer than dt: only the nodes within 3 dt of each are looked at)."""
     from rbhyst.model.records import Series
 
     near = np.zeros(len(t), dtype=bool)
     for sig in excitation.signals.values():
         if not isinstance(sig, Series):
             for b in sig.breakpoints:
-                near |= np.abs(t - b) <= 1.5 * h
+                lo, hi = np.searchsorted(t, (b - 3.0 * dt, b + 3.0 * dt))
+                near[lo:hi] |= np.abs(t[lo:hi] - b) <= 1.5 * h[lo:hi]
     return near

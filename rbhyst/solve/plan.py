@@ -7,6 +7,7 @@ run's memory does not grow with its length.
 
 from __future__ import annotations
 
+import functools
 import math
 import time
 
@@ -337,15 +338,17 @@ class FixedStepPlan(Plan):
                           np.zeros((ne, n_q)), np.zeros((N_W, n_q)), np.zeros((n_q, n_q)), buf.d, buf.v, buf.u, buf.f, buf.e,
                           buf.fb, levels, force, info)
 
-    def compute_nodes(self, levels: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def compute_nodes(self, levels: np.ndarray, t: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(t, h, out): every compute node's time from 0, the step the loop takes after it
         (dt / substeps / 2^level, each compute step's ``levels`` as a run took them; the last
-        node's the one before it), and the node of every output step."""
+        node's the one before it), and the node of every output step. ``t``: the nodes' times
+        where the caller has them (as plan.chunks gave them: compute_times' to the bit)."""
         s = self.settings
         lengths = np.diff(self.bounds)
-        t = np.empty(int(np.sum(lengths * self.substeps)) + 1)
-        t[0] = 0.0
-        t[1:] = compute_times(self.bounds, self.substeps, s.dt)
+        if t is None:
+            t = np.empty(int(np.sum(lengths * self.substeps)) + 1)
+            t[0] = 0.0
+            t[1:] = compute_times(self.bounds, self.substeps, s.dt)
         out = np.empty(int(np.sum(lengths)) + 1, dtype=np.int64)
         out[0] = 0
         np.cumsum(np.repeat(self.substeps, lengths), out=out[1:])
@@ -411,27 +414,48 @@ class FixedStepPlan(Plan):
                      rot: int | None = None) -> tuple[float, np.ndarray]:
         """Step the loop from the state (x, st) to the end as a run stepped: each compute step at
         the substep level ``levels`` holds (a run's, as it took them; only Newton's failure
-        splits a step further), under ``load`` at every compute node, a row after every step.
-        ``rows.buffers(node, steps)`` gives the arrays a chunk's rows go into, from compute node
-        ``node`` + 1 on, and ``rows.filled(node, steps)`` hears they are there (the estimate's
-        companion and its probe: rbhyst.solve.companion). ``rot``: a kinematics' code other than
-        the system's. Returns the kernel seconds and the levels the steps took."""
+        splits a step further), under ``load`` at every compute node, a row after every step,
+        in one call of the compiled loop (kernels.through). ``rows.arrays(scratch)`` gives the
+        arrays the rows go into (the estimate's companion and its probe: rbhyst.solve.companion's
+        KeptRows, PickedRows), ``scratch`` the rows a segment's own may need. ``rot``: a
+        kinematics' code other than the system's. Returns the kernel seconds and the levels the
+        steps took."""
         s = self.settings
+        ne, n_q = self.bvec.shape
+        segments, coefs, through = self._through
+        scratch = int(np.max(segments[:, 1] * segments[:, 2]))
+        d, v, u, f, e, fb, whole, take, pick_d, pick_v, pick_f = rows.arrays(scratch)
+        nodes = len(levels) + 1
+        # the compiled loop checks no bounds: never let it write past an array
+        for out, every in zip((d, v, u, f), whole):
+            if len(out) < (nodes if every else scratch):
+                raise RuntimeError(f"{len(out)} rows for {nodes if every else scratch}")
+        if len(load) < nodes or len(e) < scratch or (len(take) and (take[-1] >= nodes or len(pick_d) <= len(take))):
+            raise RuntimeError("the arrays do not hold the run's rows")
         taken = levels.copy()
         info = np.zeros(kernels.INFO_SIZE)
-        wall, node = 0.0, 0
-        for first, n_out, nsub in self.segments(fine=True):
-            steps = n_out * nsub
-            buf = rows.buffers(node, steps)
-            tic = time.perf_counter()
-            written = self._call(load[node:node + steps + 1], s.dt * first, nsub, s.dt / nsub, 1, steps, x, st, buf,
-                                 rot, taken[node:node + steps], True, info)
-            wall += time.perf_counter() - tic
-            _raise_on_failure(self.system, s, info)
-            assert written == steps, "the loop wrote fewer rows than asked"
-            rows.filled(node, steps)
-            node += steps
+        tic = time.perf_counter()
+        done = through(self.method.kernel_id, coefs, self._mass, self._minv, self.cm, self.damped, self.bvec,
+                       self.axial, self.system.rotation_index if rot is None else rot, self.system.mult, self.params,
+                       self.wgt, load, segments, s.dt, s.max_omega_dt, s.max_substep_level, s.newton_tol,
+                       s.newton_max_iter, x, st, np.zeros((ne, N_STATE)), np.zeros((ne, 2)), np.zeros((ne, n_q)),
+                       np.zeros((N_W, n_q)), np.zeros((n_q, n_q)), d, v, u, f, e, fb, whole, take, pick_d, pick_v,
+                       pick_f, taken, info)
+        wall = time.perf_counter() - tic
+        _raise_on_failure(self.system, s, info)
+        assert done == nodes - 1, "the loop took fewer steps than asked"
         return wall, taken
+
+    @functools.cached_property
+    def _through(self):
+        """(segments, coefficients, kernel) of step_through: the fine segments as a table (first
+        output step, output steps, substeps each, their coefficients' row, level0), every
+        splitting's coefficients stacked, and the compiled loop for n coordinates."""
+        order = sorted(self.coef)
+        segments = np.array([(first, n_out, nsub, order.index(nsub), self.level0[nsub])
+                             for first, n_out, nsub in self.segments(fine=True)], dtype=np.int64).reshape(-1, 5)
+        coefs = np.ascontiguousarray(np.stack([self.coef[k] for k in order]))
+        return segments, coefs, kernel("step_through", self.bvec.shape[1])
 
     def run(self, keep: bool = True, csv=None, compare_every: int | None = None, progress=None,
             tap=None) -> Result:

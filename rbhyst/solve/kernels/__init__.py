@@ -4,7 +4,8 @@
 - :mod:`.elements`: the element rows at a new configuration (VRM, seed eqs. 5-17), the
   stiffness bounds the monitor needs;
 - :mod:`.loop`: the loop shared by every fixed-step method (substeps, monitor, energy,
-  chunked output); a method's own step lives beside its coefficients in
+  chunked output), and :mod:`.through`, a whole run stepped again in one call of it (the
+  estimate's companion and its probe); a method's own step lives beside its coefficients in
   :mod:`rbhyst.solve.integrators`;
 - :mod:`.dop853`: the adaptive integration; :mod:`.csvfmt`: CSV text; :mod:`.reduce`: peaks;
 - :mod:`.modified`, :mod:`.redrive`: the error estimate's companion (its load from the

@@ -19,7 +19,7 @@ PACKAGE = Path(__file__).resolve().parents[2]
 
 #: every source file whose code (or constants) the exported kernels compile in
 SOURCES = ("model/hysteresis.py", "model/vrm.py", "model/signals.py", "solve/kernels/layout.py",
-           "solve/kernels/elements.py", "solve/kernels/rotations.py", "solve/kernels/loop.py", "solve/kernels/csvfmt.py", "solve/kernels/reduce.py",
+           "solve/kernels/elements.py", "solve/kernels/rotations.py", "solve/kernels/loop.py", "solve/kernels/through.py", "solve/kernels/csvfmt.py", "solve/kernels/reduce.py",
            "solve/kernels/redrive.py", "solve/kernels/modified.py",
            "solve/kernels/dop853.py", "solve/kernels/dop853_layout.py", "solve/integrators/steps.py",
            "solve/integrators/chang.py", "solve/integrators/central_difference.py", "solve/integrators/kr_alpha.py",
@@ -38,6 +38,11 @@ EXPORTS = {
                   "f8[:,:,::1], f8[::1], f8[:,::1], f8, f8, i8, i8, f8, i8, i8, f8, i8, f8[::1], f8[:,:,::1], f8[:,::1], "
                   "f8[:,::1], f8[:,::1], f8[:,::1], f8[:,::1], f8[:,::1], f8[:,::1], f8[:,::1], f8[:,::1], f8[:,::1], "
                   "f8[::1], i8[::1], b1, f8[::1])"),
+    "step_through": ("rbhyst.solve.kernels.through", "step_through",
+                     "i8(i8, f8[:,:,:,:,::1], UniTuple(f8, {n}), UniTuple(f8, {n}), f8[:,::1], b1, f8[:,::1], f8[::1], i8, "
+                     "f8[::1], f8[:,:,::1], f8[::1], f8[:,::1], i8[:,::1], f8, f8, i8, f8, i8, f8[::1], f8[:,:,::1], "
+                     "f8[:,::1], f8[:,::1], f8[:,::1], f8[:,::1], f8[:,::1], f8[:,::1], f8[:,::1], f8[:,::1], f8[:,::1], "
+                     "f8[:,::1], f8[::1], b1[::1], i8[::1], f8[:,::1], f8[:,::1], f8[:,::1], i8[::1], f8[::1])"),
     "integrate": ("rbhyst.solve.kernels.dop853", "_integrate",
                   "i8(UniTuple(f8, {n}), f8[:,::1], f8[::1], i8, f8[::1], f8[:,:,::1], f8[:,::1], f8[::1], f8[:,:,::1], f8[:,::1], "
                   "f8[::1], f8, f8[::1], f8[:,::1], f8[::1], f8, i8, f8[:,::1], f8[::1], f8[::1], f8[::1], "

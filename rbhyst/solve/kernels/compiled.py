@@ -106,5 +106,7 @@ def run_kernels():
     from rbhyst.solve.kernels.reduce import neglected_terms, reduce_rows
     from rbhyst.solve.kernels.modified import source_and_offset
     from rbhyst.solve.kernels.redrive import redrive
+    from rbhyst.solve.kernels.through import step_through
 
-    return run_chunk, _decompose, _render, reduce_rows, _integrate, redrive, source_and_offset, neglected_terms
+    return (run_chunk, _decompose, _render, reduce_rows, _integrate, redrive, source_and_offset, neglected_terms,
+            step_through)
