@@ -48,7 +48,6 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from rbhyst.model.kinematics import loads_at
 from rbhyst.solve.kernels.layout import LOCATED, MODIFIED, SMALL, x_slice
 
 #: the methods whose modified equation is written out here
@@ -79,21 +78,17 @@ def unfit(plan) -> str | None:
 class RunTap:
     """A run's tap (plan.run): at every compute step its time, coordinates, velocities and element
     forces, and the load as the loop took it, in arrays of the whole run (its compute nodes are
-    known before it runs: the stiffness monitor splits a step within it, not into more rows);
-    the method's own acceleration A = M^-1 (p - R - C V) at the nodes from them once it ran
-    (``accelerations``). The loop writes the rows straight into them (``buffers``): no copy."""
+    known before it runs: the stiffness monitor splits a step within it, not into more rows).
+    The loop writes the rows straight into them (``buffers``): no copy."""
 
     def __init__(self, plan):
-        self.minv = plan.minv
-        self.layout = plan.layout
-        self.rot = plan.system.rotation_index
         self.c = plan.cm[:plan.system.n] if plan.damped else None
         n = plan.system.n
         nodes = int(np.sum(np.diff(plan.bounds) * plan.substeps)) + 1
         x, st = plan.initial_state()
         start = plan.start_row(x, st)
         self._rows = KeptRows(start, nodes)  # d, v, f at every node; u and e a chunk's at a time
-        self._a0 = x[x_slice(n, 2)].copy()  # (the loop's own at t = 0: equilibrium under the load)
+        self.a0 = x[x_slice(n, 2)].copy()  # (the loop's own acceleration at t = 0: at rest under the load)
         self.d, self.v, self.f = self._rows.d, self._rows.v, self._rows.f
         self.t = np.empty(nodes)  # every compute node's time, as the loop took it
         self.t[0] = 0.0
@@ -117,19 +112,6 @@ class RunTap:
         self.levels[k - 1:k - 1 + m] = levels
         self.next = k + m
         self.wall_s += time.perf_counter() - tic
-
-    def accelerations(self) -> np.ndarray:
-        """(nodes, n) the method's acceleration A = M^-1 (p - R - C V) at every node, from the
-        rows and the load the run left (node 0: the loop's own, at rest under the load)."""
-        n = len(self.minv)
-        a = np.empty((len(self.t), n))
-        a[0] = self._a0
-        d, v, f = self.d[1:], self.v[1:], self.f[1:]
-        force = loads_at(self.load[1:], d, n, self.rot) - self.layout.restoring(f, d)
-        if self.c is not None:
-            force -= v @ self.c.T
-        np.multiply(force, self.minv, out=a[1:])
-        return a
 
 
 class KeptRows:
@@ -195,20 +177,15 @@ class Companion:
     a signal's corner) and starting velocity worked out once from the run's tap."""
 
     def __init__(self, plan, tap: RunTap, compare_every: int):
-        system, s = plan.system, plan.settings
         self.plan = plan
         assert tap.next == len(tap.t), "the run's tap missed compute steps"
-        a, v = tap.accelerations(), tap.v
         # the steps the run's stiffness monitor split are the companion's too (its source is the
         # method's error at the substeps' h)
         self.levels = tap.levels
-        t, h, out_nodes = plan.compute_nodes(self.levels, t=tap.t)
-        self.extra, self.offset = source_and_offset(s.integrator, a, v, t, h, system.mass, tap.c, system.K0,
-                                                    _near_breaks(system.excitation, t, h, s.dt))
+        self.extra, self.offset = source_from_run(plan, tap)
         # the run at the compared steps, its velocities read on its curve
-        self.rows = out_nodes[::compare_every]
-        self.take = _evenly(self.rows, len(set(plan.substeps.tolist())) == 1)
-        self.d, self.v_run = tap.d[self.take], v[self.take]
+        self.take = plan.compared_nodes(compare_every)
+        self.d, self.v_run = tap.d[self.take], tap.v[self.take]
         self.v = self.v_run - self.offset[self.take]
         self.f = tap.f[self.take]
         self.load = tap.load
@@ -302,23 +279,23 @@ def source_and_offset(method: str, a: np.ndarray, v: np.ndarray, t: np.ndarray, 
     return extra, offset
 
 
-def _evenly(rows: np.ndarray, even: bool = False):
-    """The nodes ``rows`` as a slice where they are evenly spaced (a view, not a gather); ``even``:
-    they are known to be (every output step has as many compute steps)."""
-    if len(rows) > 1 and rows[1] > rows[0] and (even or np.all(np.diff(rows) == rows[1] - rows[0])):
-        return slice(int(rows[0]), int(rows[-1]) + 1, int(rows[1] - rows[0]))
-    return rows
-
-
-def _near_breaks(excitation, t: np.ndarray, h: np.ndarray, dt: float) -> np.ndarray:
-    """The nodes t (ascending) within a step h of an analytic signal's start, end or corner (no
-    step is longer than dt: only the nodes within 3 dt of each are looked at)."""
+def source_from_run(plan, tap: RunTap):
+    """(-S, q' - V) of source_and_offset from the rows and load the run's tap kept, in one compiled
+    pass (kernels.modified.companion_source): the method's accelerations M^-1 (p - R - C V) at
+    the nodes (the seed's small rotations: R = sum mult b f), each step's h at the level the
+    run took it, no source within 1.5 h of an analytic signal's start, end or corner."""
     from rbhyst.model.records import Series
+    from rbhyst.solve.kernels.compiled import kernel
 
-    near = np.zeros(len(t), dtype=bool)
-    for sig in excitation.signals.values():
-        if not isinstance(sig, Series):
-            for b in sig.breakpoints:
-                lo, hi = np.searchsorted(t, (b - 3.0 * dt, b + 3.0 * dt))
-                near[lo:hi] |= np.abs(t[lo:hi] - b) <= 1.5 * h[lo:hi]
-    return near
+    system, s = plan.system, plan.settings
+    assert system.rotation_index == SMALL, "the companion's rows are the seed's"
+    nodes, n = len(tap.t), system.n
+    breaks = [b for sig in system.excitation.signals.values() if not isinstance(sig, Series) for b in sig.breakpoints]
+    extra, offset, a = np.empty((3, nodes, n))
+    damped = tap.c is not None
+    kernel("companion_source")(MODIFIED[s.integrator], tap.load, tap.v, tap.f, tap.a0, plan.rb,
+                               tap.c if damped else np.zeros((n, n)), damped, plan.minv,
+                               np.ascontiguousarray(system.mass, dtype=float), plan.K0, tap.t, tap.levels, plan.bounds,
+                               plan.substeps, s.dt, np.array(breaks, dtype=float), a, np.empty(nodes),
+                               np.empty(nodes, dtype=bool), extra, offset, *np.empty((3, n)))
+    return extra, offset

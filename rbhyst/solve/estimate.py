@@ -128,8 +128,8 @@ def relative_to_peaks(diff: np.ndarray, peak: np.ndarray, keys, families, system
 def scaled_errors(diff: np.ndarray, scales: np.ndarray) -> np.ndarray:
     """Each column's largest difference over its error_scales: inf where the scale is 0 and the
     difference is not, 0 where both are."""
-    with np.errstate(invalid="ignore", divide="ignore"):
-        return np.where(scales > 0, diff / scales, np.where(diff > 0, np.inf, 0.0))
+    out = np.where(diff > 0, np.inf, 0.0)  # (where the scale is 0: no division, no warning to silence)
+    return np.divide(diff, scales, out=out, where=scales > 0)
 
 
 def error_scales(peak: np.ndarray, keys, families, system: System) -> np.ndarray:

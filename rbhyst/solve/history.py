@@ -9,6 +9,7 @@ chunk in memory.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -16,7 +17,7 @@ import numpy as np
 from rbhyst.model.coordinates import PLANE, columns, translations
 from rbhyst.model.kinematics import SPATIAL, point_motion_exact, turned_loads
 from rbhyst.solve.kernels.layout import SMALL
-from rbhyst.model.points import point_columns, point_motion
+from rbhyst.model.points import point_columns, point_matrix, point_motion
 
 
 def base_columns(coordinates=PLANE) -> tuple[str, ...]:
@@ -49,10 +50,6 @@ class Raw:
     def slice(self, start: int, stop: int | None, step: int = 1) -> "Raw":
         """Rows start..stop-1 (every step-th)."""
         return Raw(*(getattr(self, k)[start:stop:step] for k in ("t", "d", "v", "u", "f", "e")))
-
-
-#: rows of changes Layout.largest_change takes at a time
-CHANGE_ROWS = 8192
 
 
 def largest_abs(x: np.ndarray) -> np.ndarray:
@@ -193,33 +190,30 @@ class Layout:
         changes of the coordinates, velocities and element forces (dd, dv, df: the kernels'
         rows) make at the same times: the table is linear in them with the seed's small
         rotations (the load, the support and the origin cancel). What the error estimate's
-        companion compares (rbhyst.solve.companion)."""
+        companion compares (rbhyst.solve.companion), in one compiled pass over the rows
+        (kernels.reduce.largest_change)."""
+        from rbhyst.solve.kernels.compiled import kernel
+
         assert self._rot == SMALL, "the table is linear in the state only with small rotations"
-        n, width = dd.shape[1], self._point_width
-        body = 3 * n + width * len(self.points)
-        rows = len(dd)
-        block = max(1, min(rows, CHANGE_ROWS))
-        # every column's changes side by side, each contiguous, CHANGE_ROWS rows at a time: one
-        # pass finds the largest, and a long run's changes are not copied whole
-        cols = np.empty((body + df.shape[1], block)).T
-        top = np.zeros(body + df.shape[1])
-        for s in range(0, rows, block):
-            e = min(rows, s + block)
-            d, c = dd[s:e], cols[:e - s]
-            dr = df[s:e] @ self._rb
-            dat = -dr
-            if self.damped:
-                dat -= dv[s:e] @ self._ct
-            dat *= self._minv
-            if self._back is not None:
-                d, dr, dat = d @ self._back, dr @ self._back, dat @ self._back
-            c[:, :n], c[:, n:2 * n], c[:, 2 * n:3 * n] = d, dat, dr
-            for k, (_, x) in enumerate(self.points):
-                point_motion(d, dat, x, out=c[:, 3 * n + width * k:3 * n + width * (k + 1)],
-                             coordinates=self.coordinates)
-            c[:, body:] = df[s:e]
-            np.maximum(top, largest_abs(c), out=top)
+        n = dd.shape[1]
+        arms, ct, back = self._change_terms
+        top = np.empty(3 * n + 2 * arms.shape[1] * arms.shape[0] + df.shape[1])
+        kernel("largest_change")(dd, dv, df, self._rb, ct, self.damped, self._minv, back, self._back is not None, arms,
+                                 top, np.empty((4, n)))
+        body = len(top) - df.shape[1]
         return np.concatenate([top[:body], top[body:][self._expand]])
+
+    @functools.cached_property
+    def _change_terms(self):
+        """largest_change's constant arrays: every point's T(x) (points, translations, n), C^T and
+        the turn back to the deck's axes (zeros and the identity where there are none)."""
+        n = len(self.coordinates)
+        arms = np.zeros((len(self.points), len(self._moving), n))
+        for k, (_, x) in enumerate(self.points):
+            arms[k] = point_matrix(x, self.coordinates)
+        ct = np.ascontiguousarray(self._ct) if self._ct is not None else np.zeros((n, n))
+        back = np.ascontiguousarray(self._back) if self._back is not None else np.eye(n)
+        return arms, ct, back
 
     def _rest(self, raw: Raw, out: np.ndarray, at: np.ndarray, omega=None) -> None:
         """The columns after G's motion, resultant and total acceleration (in the deck's axes in

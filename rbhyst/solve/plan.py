@@ -246,7 +246,7 @@ class FixedStepPlan(Plan):
         self.minv = 1.0 / mass
         self.cm = np.ascontiguousarray(system.kernel_damping)  # (C, and turning dampers' rows: exact kinematics)
         self.damped = bool(np.any(self.cm != 0.0))
-        k0 = system.K0
+        self.K0 = k0 = np.ascontiguousarray(system.K0, dtype=float)  # (the system works it out at every call)
         self.coef, self.level0 = {}, {}
         for nsub in np.array(sorted(set(self.substeps.tolist())), dtype=np.int64):  # (np.unique imports numpy.ma)
             h_c = s.dt / nsub
@@ -338,26 +338,26 @@ class FixedStepPlan(Plan):
                           np.zeros((ne, n_q)), np.zeros((N_W, n_q)), np.zeros((n_q, n_q)), buf.d, buf.v, buf.u, buf.f, buf.e,
                           buf.fb, levels, force, info)
 
-    def compute_nodes(self, levels: np.ndarray, t: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(t, h, out): every compute node's time from 0, the step the loop takes after it
-        (dt / substeps / 2^level, each compute step's ``levels`` as a run took them; the last
-        node's the one before it), and the node of every output step. ``t``: the nodes' times
-        where the caller has them (as plan.chunks gave them: compute_times' to the bit)."""
-        s = self.settings
-        lengths = np.diff(self.bounds)
-        if t is None:
-            t = np.empty(int(np.sum(lengths * self.substeps)) + 1)
-            t[0] = 0.0
-            t[1:] = compute_times(self.bounds, self.substeps, s.dt)
-        out = np.empty(int(np.sum(lengths)) + 1, dtype=np.int64)
+    def compared_nodes(self, every: int):
+        """The compute node of every ``every``-th output step, from t = 0 (the rows a run's estimate
+        compares: Rows.compare_every): a slice where they are evenly spaced (a view, not a
+        gather), else their indices."""
+        if len(set(self.substeps.tolist())) == 1:  # (every output step as many compute steps)
+            step = every * int(self.substeps[0])
+            return slice(0, (self.n_steps // every) * step + 1, step)
+        out = np.empty(self.n_steps + 1, dtype=np.int64)
         out[0] = 0
-        np.cumsum(np.repeat(self.substeps, lengths), out=out[1:])
-        h = np.empty(len(t))
-        h[:-1] = np.repeat(s.dt / self.substeps, lengths * self.substeps)
-        if levels.any():  # (h / 2^level, exactly; most runs split no step)
-            h[:-1] = np.ldexp(h[:-1], -levels)
-        h[-1] = h[-2] if len(h) > 1 else s.dt
-        return t, h, out
+        np.cumsum(np.repeat(self.substeps, np.diff(self.bounds)), out=out[1:])
+        rows = out[::every]
+        if len(rows) > 1 and np.all(np.diff(rows) == rows[1] - rows[0]):
+            return slice(0, int(rows[-1]) + 1, int(rows[1] - rows[0]))
+        return rows
+
+    @functools.cached_property
+    def rb(self) -> np.ndarray:
+        """(kernel rows, n) each row's share of the mounts' resultant R = sum mult b f (the seed's
+        small rotations)."""
+        return np.ascontiguousarray(self.bvec * self.system.mult[:, None])
 
     def segments(self, fine: bool = False):
         """(first output step, steps, substeps each): runs of equal splitting, at most a chunk of
@@ -422,8 +422,7 @@ class FixedStepPlan(Plan):
         steps took."""
         s = self.settings
         ne, n_q = self.bvec.shape
-        segments, coefs, through = self._through
-        scratch = int(np.max(segments[:, 1] * segments[:, 2]))
+        segments, coefs, through, scratch = self._through
         d, v, u, f, e, fb, whole, take, pick_d, pick_v, pick_f = rows.arrays(scratch)
         nodes = len(levels) + 1
         # the compiled loop checks no bounds: never let it write past an array
@@ -440,7 +439,7 @@ class FixedStepPlan(Plan):
                        self.wgt, load, segments, s.dt, s.max_omega_dt, s.max_substep_level, s.newton_tol,
                        s.newton_max_iter, x, st, np.zeros((ne, N_STATE)), np.zeros((ne, 2)), np.zeros((ne, n_q)),
                        np.zeros((N_W, n_q)), np.zeros((n_q, n_q)), d, v, u, f, e, fb, whole, take, pick_d, pick_v,
-                       pick_f, taken, info)
+                       pick_f, taken, True, info)
         wall = time.perf_counter() - tic
         _raise_on_failure(self.system, s, info)
         assert done == nodes - 1, "the loop took fewer steps than asked"
@@ -448,14 +447,15 @@ class FixedStepPlan(Plan):
 
     @functools.cached_property
     def _through(self):
-        """(segments, coefficients, kernel) of step_through: the fine segments as a table (first
-        output step, output steps, substeps each, their coefficients' row, level0), every
-        splitting's coefficients stacked, and the compiled loop for n coordinates."""
+        """(segments, coefficients, kernel, rows) of step_through: the fine segments as a table
+        (first output step, output steps, substeps each, their coefficients' row, level0), every
+        splitting's coefficients stacked, the compiled loop for n coordinates and the most
+        compute steps of a segment."""
         order = sorted(self.coef)
         segments = np.array([(first, n_out, nsub, order.index(nsub), self.level0[nsub])
                              for first, n_out, nsub in self.segments(fine=True)], dtype=np.int64).reshape(-1, 5)
         coefs = np.ascontiguousarray(np.stack([self.coef[k] for k in order]))
-        return segments, coefs, kernel("step_through", self.bvec.shape[1])
+        return segments, coefs, kernel("step_through", self.bvec.shape[1]), int(np.max(segments[:, 1] * segments[:, 2]))
 
     def run(self, keep: bool = True, csv=None, compare_every: int | None = None, progress=None,
             tap=None) -> Result:

@@ -103,10 +103,10 @@ def run_kernels():
     from rbhyst.solve.kernels.csvfmt import _decompose, _render
     from rbhyst.solve.kernels.dop853 import _integrate
     from rbhyst.solve.kernels.loop import run_chunk
-    from rbhyst.solve.kernels.reduce import neglected_terms, reduce_rows
-    from rbhyst.solve.kernels.modified import source_and_offset
+    from rbhyst.solve.kernels.reduce import largest_change, neglected_terms, reduce_rows
+    from rbhyst.solve.kernels.modified import companion_source, source_and_offset
     from rbhyst.solve.kernels.redrive import redrive
     from rbhyst.solve.kernels.through import step_through
 
     return (run_chunk, _decompose, _render, reduce_rows, _integrate, redrive, source_and_offset, neglected_terms,
-            step_through)
+            step_through, companion_source, largest_change)

@@ -13,11 +13,53 @@ loop takes after it,
 
 from __future__ import annotations
 
+import math
+
 from numba import njit
 
 from rbhyst.solve.kernels.layout import MODIFIED
 
 NEWMARK, CENTRAL_DIFFERENCE, CHANG = MODIFIED["newmark"], MODIFIED["central-difference"], MODIFIED["chang"]
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def companion_source(method, load, v, f, a0, rb, c, damped, minv, mass, k0, t, levels, bounds, substeps, dt, breaks,
+                     a, h, near, extra, offset, d1, d2, w1):
+    """source_and_offset from a run's rows at its compute nodes t (the seed's small rotations):
+    the method's accelerations a = M^-1 (p - R - C V) with R = f rb (node 0's, a0, the loop's
+    own at rest), each node's step h = dt / nsub / 2^level (output steps bounds[i]..bounds[i +
+    1] take substeps[i] compute steps each, each compute step at its ``levels``; the last node's
+    the one before it) and the nodes ``near`` within 1.5 h of a signal's start, end or corner
+    (``breaks``), all written into the arrays given."""
+    nn, n = a.shape
+    ne = f.shape[1]
+    for j in range(n):
+        a[0, j] = a0[j]
+    for i in range(1, nn):
+        for j in range(n):
+            r = 0.0
+            for e in range(ne):
+                r += f[i, e] * rb[e, j]
+            x = load[i, j] - r
+            if damped:
+                cv = 0.0
+                for k in range(n):
+                    cv += v[i, k] * c[j, k]
+                x -= cv
+            a[i, j] = x * minv[j]
+    i = 0
+    for s in range(substeps.shape[0]):
+        base = dt / substeps[s]
+        for _ in range((bounds[s + 1] - bounds[s]) * substeps[s]):
+            h[i] = math.ldexp(base, -int(levels[i]))  # (exact: a power of two)
+            i += 1
+    h[nn - 1] = h[nn - 2] if nn > 1 else dt
+    for i in range(nn):
+        near[i] = False
+        for b in breaks:
+            if abs(t[i] - b) <= 1.5 * h[i]:
+                near[i] = True
+    source_and_offset(method, a, v, t, h, mass, c, damped, k0, near, extra, offset, d1, d2, w1)
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)

@@ -100,3 +100,62 @@ def neglected_terms(theta, a, b, forces, top):
         if r > worst:
             worst = r
     return worst
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def largest_change(dd, dv, df, rb, ct, damped, minv, back, turned, arms, top, w):
+    """top: the largest |change| over the rows of every column the error estimate compares that
+    changes dd, dv (rows, n) of the coordinates and velocities and df (rows, kernel rows) of the
+    element forces make with the seed's small rotations (history.Layout.largest_change): G's
+    displacement, total acceleration and the mounts' resultant (dr = df rb, dat = -M^-1 (dr +
+    C dv), ct = C^T; turned to the deck's axes, x back, where ``turned``), each point's
+    displacement then total acceleration along its translations (arms (points, m, n): u_P = T q,
+    points.point_matrix), then every kernel row's force. w (4, n): work space. One pass, no
+    array of the changes."""
+    rows, n = dd.shape
+    ne = df.shape[1]
+    npt, m = arms.shape[0], arms.shape[1]
+    body = 3 * n + 2 * m * npt
+    for c in range(top.shape[0]):
+        top[c] = 0.0
+    d, dr, dat, z = w[0], w[1], w[2], w[3]
+    for i in range(rows):
+        for j in range(n):
+            acc = 0.0
+            for e in range(ne):
+                acc += df[i, e] * rb[e, j]
+            dr[j] = acc
+        for j in range(n):
+            x = -dr[j]
+            if damped:
+                acc = 0.0
+                for k in range(n):
+                    acc += dv[i, k] * ct[k, j]
+                x -= acc
+            dat[j] = x * minv[j]
+            d[j] = dd[i, j]
+        if turned:
+            for vec in (d, dr, dat):
+                for j in range(n):
+                    acc = 0.0
+                    for k in range(n):
+                        acc += vec[k] * back[k, j]
+                    z[j] = acc
+                for j in range(n):
+                    vec[j] = z[j]
+        for j in range(n):
+            top[j] = max(top[j], abs(d[j]))
+            top[n + j] = max(top[n + j], abs(dat[j]))
+            top[2 * n + j] = max(top[2 * n + j], abs(dr[j]))
+        for p in range(npt):
+            c = 3 * n + 2 * m * p
+            for r in range(m):
+                ud = 0.0
+                ua = 0.0
+                for j in range(n):
+                    ud += arms[p, r, j] * d[j]
+                    ua += arms[p, r, j] * dat[j]
+                top[c + r] = max(top[c + r], abs(ud))
+                top[c + m + r] = max(top[c + m + r], abs(ua))
+        for e in range(ne):
+            top[body + e] = max(top[body + e], abs(df[i, e]))

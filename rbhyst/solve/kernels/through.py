@@ -10,6 +10,7 @@ nodes picked from each segment's rows), with no Python between the segments.
 
 from __future__ import annotations
 
+import numpy as np
 from numba import njit
 
 from rbhyst.solve.kernels.loop import run_chunk
@@ -18,9 +19,10 @@ from rbhyst.solve.kernels.loop import run_chunk
 @njit(cache=True, error_model="numpy", _nrt=False)
 def step_through(method, coefs, mass, minv, cm, damped, bvec, axial, rot, mult, params, wgt, load, segments, dt,
                  omega_dt_limit, max_level, newton_tol, newton_max_iter, x, st, st_save, kpeak, bq, w, wm,
-                 out_d, out_v, out_u, out_f, out_e, out_fb, whole, take, pick_d, pick_v, pick_f, levels, info):
+                 out_d, out_v, out_u, out_f, out_e, out_fb, whole, take, pick_d, pick_v, pick_f, levels, force, info):
     """Advance the state x, st through every segment, each compute step at the level ``levels``
-    holds (run_chunk's ``force``; a step is split further only where Newton's iterations fail).
+    holds where ``force`` (a step is split further only where Newton's iterations fail), else
+    as the stiffness monitor judges (run_chunk's ``force``).
 
     segments (k, 5): each run of equal splitting's first output step, output steps, compute
     steps each (nsub), its coefficients' index in ``coefs`` and the least substep level (the
@@ -34,6 +36,8 @@ def step_through(method, coefs, mass, minv, cm, damped, bvec, axial, rot, mult, 
     unless info says how the loop failed)."""
     node = 0
     p = 0
+    every = np.int64(1)  # (a row after every compute step; typed as run_chunk's own call types it, not
+    # as the literal 1, which would compile the loop a second time)
     for s in range(segments.shape[0]):
         first, n_out, nsub, ci, level0 = segments[s, 0], segments[s, 1], segments[s, 2], segments[s, 3], segments[s, 4]
         steps = n_out * nsub
@@ -44,9 +48,9 @@ def step_through(method, coefs, mass, minv, cm, damped, bvec, axial, rot, mult, 
         f = out_f[a:b] if whole[3] else out_f[:steps]
         fb = out_f[node] if whole[3] else out_fb
         written = run_chunk(method, coefs[ci], mass, minv, cm, damped, bvec, axial, rot, mult, params, wgt,
-                            load[node:node + steps + 1], dt * first, dt / nsub, 1, steps, omega_dt_limit, level0,
+                            load[node:node + steps + 1], dt * first, dt / nsub, every, steps, omega_dt_limit, level0,
                             max_level, newton_tol, newton_max_iter, x, st, st_save, kpeak, bq, w, wm,
-                            d, v, u, f, out_e[:steps], fb, levels[node:node + steps], True, info)
+                            d, v, u, f, out_e[:steps], fb, levels[node:node + steps], force, info)
         if written != steps:
             return node + written
         while p < take.shape[0] and take[p] <= node + steps:
