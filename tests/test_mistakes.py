@@ -93,3 +93,15 @@ def test_command_line_mistakes_get_rbhyst_s_frame(tmp_path, args, lines):
     assert code == 2
     assert err.splitlines() == lines
     assert list(tmp_path.iterdir()) == [deck]
+
+
+@pytest.mark.parametrize("mass", [5e-324, 1e-320])
+def test_a_mass_too_small_to_divide_by_is_one_line(tmp_path, mass):
+    """A positive mass the deck's schema takes, but whose inverse overflows (M^-1 is in every
+    step): one line naming body.mass, exit 2, not numpy's LinAlgError from the run's set-up."""
+    data = seed_deck(duration=0.05)
+    data["body"]["mass"] = mass
+    code, err = invoke("run", write_deck(tmp_path, data), "--no-plots")
+    assert code == 2, err
+    [line] = err.strip().splitlines()
+    assert line.startswith("error: body.mass: the body's mass matrix has entries ") and "too small to divide by" in line

@@ -774,6 +774,13 @@ def _system(deck: dk.Deck, body, mass, rows, names, mult, elements, excitation, 
     _set_stiffnesses gives), Rayleigh damping from their K0 where the deck asks for it, and
     ``extra`` (kinematics, frame, coordinates)."""
     sets, k_rev, k_el = stiffnesses
+    with np.errstate(divide="ignore", over="ignore"):
+        inverse = 1.0 / np.asarray(mass, dtype=float)
+    if not np.all(np.isfinite(inverse) & (inverse > 0)):
+        # (a positive mass the deck allows, 5e-324 kg, whose inverse overflows: M^-1 is every step's)
+        key = "body.parts" if deck.body.parts else "body.inertia" if deck.body.inertia is not None else "body.mass"
+        raise InputError(f"{key}: the body's mass matrix has entries {', '.join(f'{m:.3g}' for m in mass)} "
+                         "(kg, kg m2): too small to divide by; check the deck's mass and units")
     bvec = np.array(rows)
     rayleigh = None
     if deck.damping is not None and deck.damping.rayleigh is not None:
