@@ -31,7 +31,9 @@ def step_through(method, coefs, mass, minv, cm, damped, bvec, axial, rot, mult, 
     out_d, out_v, out_u, out_f: the rows after every compute step, each an array of every
     node (``whole``[0..3] true: row k + 1 after step k, row 0 the caller's) or one segment's
     scratch (row 0 after its first step); out_e and out_fb scratch. take (m,): compute nodes
-    (ascending, > 0) whose d, v and f go to rows 1.. of pick_d, pick_v, pick_f.
+    (ascending, > 0) whose d, v and f go to rows 1.. of pick_d, pick_v, pick_f. With rot =
+    LOCATED a row's force patched by the next step (run_chunk) is kept across a segment's start
+    only in an out_f of every node (the companion keeps it so, or re-drives its forces).
     The arguments between them are run_chunk's. Returns the compute steps taken (all of them,
     unless info says how the loop failed)."""
     node = 0
