@@ -69,7 +69,7 @@ def unfit(plan) -> str | None:
         return "the spectra are estimated against the adaptive solution"
     if plan.cm.shape[0] > system.n:
         return "dampers that turn"
-    nodes = int(np.sum(np.diff(plan.bounds) * plan.substeps)) + 1
+    nodes = plan.compute_steps + 1
     if nodes * max(plan.bvec.shape[0], system.n) > MAX_VALUES:
         return "too long a run to keep every step's deformation"
     return None
@@ -84,7 +84,7 @@ class RunTap:
     def __init__(self, plan):
         self.c = plan.cm[:plan.system.n] if plan.damped else None
         n = plan.system.n
-        nodes = int(np.sum(np.diff(plan.bounds) * plan.substeps)) + 1
+        nodes = plan.compute_steps + 1
         x, st = plan.initial_state()
         start = plan.start_row(x, st)
         self._rows = KeptRows(start, nodes)  # d, v, f at every node; u and e a chunk's at a time

@@ -183,6 +183,7 @@ class Plan:
         # runs of output steps split alike (Excitation.substeps), and the most compute steps a step
         self.bounds, self.substeps = system.excitation.substeps(s.dt, self.n_steps)
         self.nsub = int(self.substeps.max())
+        self.compute_steps = int(np.sum(np.diff(self.bounds) * self.substeps))  # (the rows of a tap, a companion)
 
     def check_size(self, keep: bool, folder=None) -> list[str]:
         """Refuse, before anything runs, what cannot fit: rows kept in memory beyond
@@ -271,7 +272,7 @@ class FixedStepPlan(Plan):
         self.chunk = min(per_chunk, self.n_steps)
         # compute-step rows (``fine``) a chunk holds: as many as the memory bound allows, so that
         # a short run takes one call of the loop a segment (a chunk's Python costs some 30 us)
-        self.fine_chunk = min(per_chunk, int(np.sum(np.diff(self.bounds) * self.substeps)))
+        self.fine_chunk = min(per_chunk, self.compute_steps)
         self._initial = None  # (initial_state, computed once)
         # the loop for n coordinates, loaded (or compiled) once, and M and M^-1 as tuples: their
         # length n is then a constant of the compiled loop (one compilation per n), which
@@ -426,9 +427,9 @@ class FixedStepPlan(Plan):
         d, v, u, f, e, fb, whole, take, pick_d, pick_v, pick_f = rows.arrays(scratch)
         nodes = len(levels) + 1
         # the compiled loop checks no bounds: never let it write past an array
-        for out, every in zip((d, v, u, f), whole):
-            if len(out) < (nodes if every else scratch):
-                raise RuntimeError(f"{len(out)} rows for {nodes if every else scratch}")
+        for out, kept in zip((d, v, u, f), whole):
+            if len(out) < (nodes if kept else scratch):
+                raise RuntimeError(f"{len(out)} rows for {nodes if kept else scratch}")
         if len(load) < nodes or len(e) < scratch or (len(take) and (take[-1] >= nodes or len(pick_d) <= len(take))):
             raise RuntimeError("the arrays do not hold the run's rows")
         taken = levels.copy()
