@@ -5,8 +5,9 @@
 For the seed deck, the median over N random scenes (tests/test_accuracy.py's generator, seeds
 1000...) and every deck of the folders given: ``accuracy.wall_s / analysis.wall_s`` (each the
 best of ``--repeat`` runs in one process, kernels loaded), of the estimate the seconds of its
-companion's and its probe's loops (``loops ms``, nan where the adaptive solutions gave the
-estimate; the two side by side on two cores can sum to more than the estimate took), the
+compiled calls (``loops ms``: the companion's and its probe's loops, and where the check has no
+core of its own the source and the reductions too, one call; nan where the adaptive solutions
+gave the estimate; side by side on two cores they can sum to more than the estimate took), the
 estimate's status, and the
 largest estimated error over the largest true error (the run's rows against the reference at
 rtol 1e-12, every column the estimate covers: what the tests hold within [0.5, 10]). The
@@ -49,7 +50,7 @@ def measure(path, repeat: int, integrator: str | None = None):
         res = rbhyst.run(path, **kw)
         best_step = min(best_step, res.wall_s)
         best_est = min(best_est, res.accuracy["wall_s"])
-        # the companion's and the probe's loops (their kernels' seconds): the rest is Python
+        # the companion's compiled calls (their seconds): the rest is Python
         best_loops = min(best_loops, res.accuracy.get("companion", {}).get("wall_s", np.nan))
     est = max(v for k, v in res.accuracy["estimated_error"].items() if not k.startswith("sa_"))
     true = true_error(res)

@@ -424,3 +424,60 @@ def test_the_largest_change_of_every_column_is_the_table_s_own_difference(tmp_pa
     wide = [np.repeat(x, 2, axis=0) for x in (dd, dv, df)]
     assert not wide[0][::2].flags.c_contiguous
     np.testing.assert_array_equal(layout.largest_change(*(x[::2] for x in wide)), whole)
+
+
+def _python_and_one_call(planned, tap, every, check, largest):
+    """(the Python path's changes: Companion.run's and Companion.probe's, each through
+    Layout.largest_change; estimate_in_one_call's (changed, moved)) of one tapped run."""
+    from rbhyst.solve.companion import Companion, estimate_in_one_call
+    from rbhyst.solve.estimate import COMPANION_PROBE, error_scales
+    from rbhyst.solve.history import estimate_columns
+
+    res = planned.run(keep=False, tap=tap)
+    layout = res.layout
+    cols = estimate_columns(layout)
+    columns = [c for _, c, _ in cols]
+    peaks = np.maximum(np.abs(res.extremes.max[columns]), np.abs(res.extremes.min[columns]))
+    scales = error_scales(peaks, [k for k, _, _ in cols], [f for _, _, f in cols], res.system)
+    changed, moved, _ = estimate_in_one_call(planned, tap, every, layout, scales, check, largest, COMPANION_PROBE)
+    companion = Companion(planned, tap, every)
+    diff, _ = companion.run()
+    probed, _ = companion.probe(COMPANION_PROBE)
+    return (layout.largest_change(*diff), layout.largest_change(*probed)), (changed, moved), scales
+
+
+@pytest.mark.parametrize("scene_name", ["seed", "shock split in 14", "damped with points"])
+@pytest.mark.parametrize("every", [1, 3, 7])
+def test_the_estimate_in_one_call_is_the_companion_and_its_probe_to_the_bit(tmp_path, scene_name, every):
+    """The companion, its probe and their largest changes in one compiled call (kernels.estimate,
+    where the check has no core of its own) give what Companion.run and Companion.probe give
+    through Layout.largest_change, bit for bit: the compared nodes worked out in the call from
+    the segments' substeps (a shock that splits steps in 14 around it, every 3rd or 7th output
+    step compared), the forces re-driven where steps were split, Rayleigh damping and points;
+    the probe runs only where the companion's estimate exceeds ``check``, none past ``largest``."""
+    from rbhyst.results.analysis import _companion, plan, scene
+    from rbhyst.solve.estimate import scaled_errors
+
+    data = seed_deck(duration=0.6, dt=2e-3)
+    if scene_name == "shock split in 14":
+        data["excitation"] = {"support": {"x1": {"type": "half-sine", "amplitude": 20.0, "units": "g",
+                                                 "duration": 0.0061, "start": 0.0507}}}
+    elif scene_name == "damped with points":
+        data["damping"] = {"rayleigh": {"ratio": 0.05, "modes": [1, 2]}}
+        data["output"] = {"points": [{"name": "top", "point": [0.3, 1.0]}, {"name": "side", "point": [-0.7, 0.0]}]}
+    system, settings = scene(rbhyst.load_deck(write_deck(tmp_path, data)))
+    planned = plan(system, settings)
+    assert (planned.substeps.max() == 14) == (scene_name == "shock split in 14")
+    planned, tap = _companion(planned)
+    (want_c, want_p), (changed, moved), scales = _python_and_one_call(planned, tap, every, -1.0, np.inf)
+    np.testing.assert_array_equal(changed, want_c)
+    np.testing.assert_array_equal(moved, want_p)
+    worst = float(np.max(scaled_errors(want_c, scales)))
+    assert worst > 0
+    planned, tap = _companion(plan(system, settings))
+    (_, _), (changed, moved), _ = _python_and_one_call(planned, tap, every, worst, np.inf)
+    np.testing.assert_array_equal(changed, want_c)
+    assert moved is None  # (at the check itself: no probe)
+    planned, tap = _companion(plan(system, settings))
+    (_, _), (changed, moved), _ = _python_and_one_call(planned, tap, every, -1.0, 0.999 * worst)
+    assert changed is None and moved is None

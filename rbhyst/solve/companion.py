@@ -299,3 +299,58 @@ def source_from_run(plan, tap: RunTap):
                                plan.substeps, s.dt, np.array(breaks, dtype=float), a, np.empty(nodes),
                                np.empty(nodes, dtype=bool), extra, offset, *np.empty((3, n)))
     return extra, offset
+
+
+def estimate_in_one_call(plan, tap: RunTap, compare_every: int, layout, scales: np.ndarray, check: float,
+                         largest: float, eps: float):
+    """What rbhyst.solve.estimate takes from the companion where its check does not run on a core
+    of its own: the companion's every column's largest change (history.Layout.largest_change of
+    Companion.run's differences) and, where it lies between ``check`` and ``largest`` of
+    ``scales`` (estimate.scaled_errors), the probe's at ``eps`` (Companion.probe's), in one
+    compiled call (kernels.estimate): (changed, moved, seconds); changed None where the
+    adaptive solutions must say it or the estimate is past ``largest``, moved None where the
+    probe was not needed."""
+    from rbhyst.model.records import Series
+    from rbhyst.solve.kernels import estimate as codes
+    from rbhyst.solve.kernels.compiled import kernel
+    from rbhyst.solve.kernels.layout import INFO_SIZE, N_E, N_STATE, N_W
+    from rbhyst.solve.plan import raise_on_failure
+
+    system, s = plan.system, plan.settings
+    assert system.rotation_index == SMALL, "the companion's rows are the seed's"
+    assert tap.next == len(tap.t), "the run's tap missed compute steps"
+    nodes, n = len(tap.t), system.n
+    ne = plan.bvec.shape[0]
+    count = plan.n_steps // compare_every + 1  # (the compared nodes: plan.compared_nodes', in the call)
+    segments, coefs, _ = plan._through
+    breaks = [b for sig in system.excitation.signals.values() if not isinstance(sig, Series) for b in sig.breakpoints]
+    x0, st0 = plan.initial_state()
+    arms, ct, back = layout._change_terms
+    top_c, top_p = np.empty(3 * n + 2 * arms.shape[1] * arms.shape[0] + ne), np.empty(3 * n + 2 * arms.shape[1] * arms.shape[0] + ne)
+    info = np.zeros(INFO_SIZE)
+    n_q = plan.bvec.shape[1]
+    damped = tap.c is not None
+    tic = time.perf_counter()
+    code = kernel("companion_estimate", n_q)(
+        plan.method.kernel_id, coefs, plan._mass,
+        plan._minv, plan.cm, plan.damped, plan.bvec, plan.axial, system.rotation_index, system.mult, plan.params,
+        plan.wgt, segments, s.dt, s.max_omega_dt, s.max_substep_level, s.newton_tol, s.newton_max_iter,
+        MODIFIED[s.integrator], tap.load, tap.t, tap.levels, tap.d, tap.v, tap.f, tap.a0, x0, st0, plan.rb,
+        tap.c if damped else np.zeros((n, n)), plan.minv, np.ascontiguousarray(system.mass, dtype=float), plan.K0,
+        plan.bounds, plan.substeps, np.array(breaks, dtype=float), compare_every, np.empty(count, dtype=np.int64), ct, layout.damped, back,
+        layout._back is not None, arms, layout._minv, layout._expand, scales, check, largest, eps,
+        np.empty((nodes, n)), np.empty((nodes, n)), np.empty((nodes, n)), np.empty(nodes), np.empty(nodes, dtype=bool),
+        np.empty_like(tap.load), np.empty_like(x0), np.empty_like(st0), np.zeros((ne, N_STATE)), np.zeros((ne, 2)),
+        np.zeros((ne, n_q)), np.zeros((N_W, n_q)), np.zeros((n_q, n_q)), np.empty((nodes, n)), np.empty((nodes, n)),
+        np.empty((nodes, ne)), np.empty((nodes, ne)), np.empty((nodes, N_E)), np.empty(ne), np.empty((nodes, ne)),
+        np.zeros(4, dtype=bool), np.empty((count, n)), np.empty((count, n)), np.empty((count, ne)), np.empty(count - 1, dtype=np.int64),
+        np.empty((count, n)), np.empty((count, n)), np.empty((count, ne)), top_c, top_p, np.empty((4, n)),
+        np.empty((3, n)), np.empty(nodes - 1, dtype=np.int64), True, info)
+    wall = time.perf_counter() - tic
+    if code == codes.FAILED:
+        raise_on_failure(system, s, info)
+        raise AssertionError("the companion's loop took fewer steps than asked, or the compared nodes are not the run's")
+    if code not in (codes.DONE, codes.PROBED):
+        return None, None, wall
+    expand = layout.expand_change
+    return expand(top_c), (expand(top_p) if code == codes.PROBED else None), wall

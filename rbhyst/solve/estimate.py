@@ -314,48 +314,57 @@ def _from_companion(result, settings, plan, tap, spare_core: bool = False) -> di
     the check finds undetermined. With ``spare_core`` the check (the probe) runs on a thread of
     its own beside the companion, before it is known to be needed (the kernels hold no lock of
     Python's): the seed deck's estimate 24 -> 11 ms with the rest of the companion's making; the
-    check's result is dropped where it is not needed."""
+    check's result is dropped where it is not needed. Without, the companion, the check where
+    it is needed and their reductions are one compiled call (companion.estimate_in_one_call:
+    the same numbers to the bit, without some forty calls of Python around them)."""
     from rbhyst.solve.beside import Beside
-    from rbhyst.solve.companion import Companion
+    from rbhyst.solve.companion import Companion, estimate_in_one_call
 
     stats = result.stats
     if stats.max_omega_dt > COMPANION_OMEGA_DT:
         return None
     cols = estimate_columns(result.layout)
     keys, families = [k for k, _, _ in cols], [f for _, _, f in cols]
-    companion = Companion(plan, tap, result.compare_every)
-    change = result.layout.largest_change
-
-    def probe():
-        """How far the run moves under COMPANION_PROBE of the companion's source: every
-        column's largest change (None: see Companion.probe), and the kernel seconds."""
-        moved, took = companion.probe(COMPANION_PROBE)
-        return (None if moved is None else change(*moved)), took
-
-    beside = spare_core and stats.steps_taken * plan.bvec.shape[0] >= BESIDE_MIN_WORK
-    ahead = Beside(probe, name="rbhyst companion's check") if beside else None
-    try:
-        diff, wall = companion.run()
-        changed = None if diff is None else change(*diff)
-    finally:
-        checked = ahead.result() if ahead is not None else None  # (never left running)
-    if diff is None:
-        return None
     # every column against the run's peaks over every step (its extremes: the compared rows' where
     # it compares every step; the companion's are the same to within the error, a second-order
     # change of a relative error)
     extremes, columns = result.extremes, [c for _, c, _ in cols]
     peaks = np.maximum(np.abs(extremes.max[columns]), np.abs(extremes.min[columns]))
     scales = error_scales(peaks, keys, families, result.system)
+    check = CHECK_ABOVE * settings.warn_error
+    beside = spare_core and stats.steps_taken * plan.bvec.shape[0] >= BESIDE_MIN_WORK
+    if beside:
+        companion = Companion(plan, tap, result.compare_every)
+        change = result.layout.largest_change
+
+        def probe():
+            """How far the run moves under COMPANION_PROBE of the companion's source: every
+            column's largest change (None: see Companion.probe), and the kernel seconds."""
+            moved, took = companion.probe(COMPANION_PROBE)
+            return (None if moved is None else change(*moved)), took
+
+        ahead = Beside(probe, name="rbhyst companion's check")
+        try:
+            diff, wall = companion.run()
+            changed = None if diff is None else change(*diff)
+        finally:
+            checked = ahead.result()  # (never left running)
+    else:
+        # the companion, and the probe where its estimate asks for it, in one compiled call
+        changed, moved, wall = estimate_in_one_call(plan, tap, result.compare_every, result.layout, scales, check,
+                                                    COMPANION_LARGEST, COMPANION_PROBE)
+        checked = (moved, 0.0) if moved is not None else None
+    if changed is None:
+        return None
     err = scaled_errors(changed, scales)
     info = {"steps": int(stats.steps_taken), "wall_s": wall}
     if max(err, default=0.0) > COMPANION_LARGEST:
         return None
-    if max(err, default=0.0) > CHECK_ABOVE * settings.warn_error:
+    if max(err, default=0.0) > check:
         # near the warning: is the history determined? The run again, COMPANION_PROBE of the
         # companion's source added: a determined history moves by that fraction of the error, a
         # sensitive one as much as the run itself (then the adaptive solutions say how much)
-        moved, took = checked if checked is not None else probe()
+        moved, took = checked if checked is not None else (None, 0.0)
         if moved is None:
             return None
         spread = scaled_errors(moved, scales)

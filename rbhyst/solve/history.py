@@ -16,6 +16,7 @@ import numpy as np
 
 from rbhyst.model.coordinates import PLANE, columns, translations
 from rbhyst.model.kinematics import SPATIAL, point_motion_exact, turned_loads
+from rbhyst.solve.kernels.compiled import kernel
 from rbhyst.solve.kernels.layout import SMALL
 from rbhyst.model.points import point_columns, point_matrix, point_motion
 
@@ -59,6 +60,15 @@ def largest_abs(x: np.ndarray) -> np.ndarray:
         return np.zeros(x.shape[1])
     x = np.asfortranarray(x)
     return np.maximum(x.max(axis=0), -x.min(axis=0))
+
+
+def rows_times(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """a @ b (a: rows, k; b: k, m), each row summed in the same order whatever the number of
+    rows (kernels.reduce.resultant): BLAS sums a single row in another order than a block on
+    some processors, and a run's rows would depend on where its chunks start."""
+    out = np.empty((len(a), b.shape[1]))
+    kernel("resultant")(a, b, out)
+    return out
 
 
 class Layout:
@@ -119,11 +129,12 @@ class Layout:
         names += energy
         self.names = tuple(names)
         self.coordinates = coords
-        self._expand = np.array([el.row for el in system.elements for _ in range(el.count)], dtype=int)
-        self._rb = system.bvec * system.mult[:, None]  # rows' share of R = sum mult b f
+        self._expand = np.array([el.row for el in system.elements for _ in range(el.count)], dtype=np.int64)
+        self._rb = np.ascontiguousarray(system.bvec * system.mult[:, None], dtype=float)  # rows' share of R = sum mult b f
         # exact kinematics: the rotation's entry of b_e(q) is b3 cos(theta) - c sin(theta)
         self._rot = system.rotation_index
         self._rc = system.kernel_axial * system.mult if self._rot >= 0 else None
+        self._rc_column = None if self._rc is None else np.ascontiguousarray(self._rc, dtype=float)[:, None].copy()
         self._minv = 1.0 / np.asarray(system.mass, dtype=float)
         self._ct = system.C.T.copy() if self.damped else None
         # a body that runs in its principal axes: its rows are turned back to the deck's
@@ -172,17 +183,17 @@ class Layout:
         if self._back is not None:
             for family in ("d", "v", "R", "at"):
                 block = out[:, self.slices[family]]
-                block[:] = block @ self._back
+                block[:] = rows_times(block, self._back)
         self._rest(raw, out, at)
         return out
 
     def restoring(self, f: np.ndarray, d: np.ndarray) -> np.ndarray:
         """(rows, n) the mounts' resultant R = sum mult b_e(q) f_e from the kernel rows' forces f at
         the coordinates d (the plane: small or exact rotations)."""
-        r = f @ self._rb
+        r = rows_times(f, self._rb)
         if self._rot >= 0:
             th = d[:, self._rot]
-            r[:, self._rot] = np.cos(th) * r[:, self._rot] - np.sin(th) * (f @ self._rc)
+            r[:, self._rot] = np.cos(th) * r[:, self._rot] - np.sin(th) * rows_times(f, self._rc_column)[:, 0]
         return r
 
     def largest_change(self, dd: np.ndarray, dv: np.ndarray, df: np.ndarray) -> np.ndarray:
@@ -192,15 +203,18 @@ class Layout:
         rotations (the load, the support and the origin cancel). What the error estimate's
         companion compares (rbhyst.solve.companion), in one compiled pass over the rows
         (kernels.reduce.largest_change)."""
-        from rbhyst.solve.kernels.compiled import kernel
-
         assert self._rot == SMALL, "the table is linear in the state only with small rotations"
         n = dd.shape[1]
         arms, ct, back = self._change_terms
         top = np.empty(3 * n + 2 * arms.shape[1] * arms.shape[0] + df.shape[1])
         kernel("largest_change")(dd, dv, df, self._rb, ct, self.damped, self._minv, back, self._back is not None, arms,
                                  top, np.empty((4, n)))
-        body = len(top) - df.shape[1]
+        return self.expand_change(top)
+
+    def expand_change(self, top: np.ndarray) -> np.ndarray:
+        """largest_change's columns from its kernel's: every kernel row's force to each output
+        element's (an element that shares its row with another has its change)."""
+        body = len(top) - self._rb.shape[0]
         return np.concatenate([top[:body], top[body:][self._expand]])
 
     @functools.cached_property
@@ -246,7 +260,7 @@ class Layout:
         out[:, el.start:el.stop:2] = raw.u[:, self._expand]
         out[:, el.start + 1:el.stop:2] = raw.f[:, self._expand]
         if self.dampers:
-            dv = raw.v @ self._db if not self._turning else np.repeat(
+            dv = rows_times(raw.v, self._db) if not self._turning else np.repeat(
                 np.einsum("kdi,ki->kd", self._drows(raw), raw.v), self._dcount, axis=1)
             ds = self.slices["dampers"]
             out[:, ds.start:ds.stop:2] = dv
@@ -269,7 +283,7 @@ class Layout:
         """(k, n) the viscous force C v at each row: Rayleigh's and the dampers', whose rows turn
         with the body where the kinematics are exact."""
         if not self._turning:
-            return raw.v @ self._ct
+            return rows_times(raw.v, self._ct)
         rows = self._drows(raw)
         rate = np.einsum("kdi,ki->kd", rows, raw.v)
         out = np.einsum("d,kd,kdi->ki", self._dcc, rate, rows)
@@ -399,8 +413,6 @@ class PlotData:
 
     def update(self, table: np.ndarray, extremes: Extremes) -> None:
         """Fold a chunk of rows into the buckets and into ``extremes`` (one compiled pass)."""
-        from rbhyst.solve.kernels.compiled import kernel
-
         n = len(table)
         if n == 0:
             return

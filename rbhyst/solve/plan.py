@@ -404,7 +404,7 @@ class FixedStepPlan(Plan):
             written = self._call(load, s.dt * first, nsub, s.dt / nsub, nsub // sub, n_out * sub, x, st, buf,
                                  levels=level, info=info)
             wall = time.perf_counter() - tic
-            _raise_on_failure(system, s, info)
+            raise_on_failure(system, s, info)
             assert written == n_out * sub, "the loop wrote fewer rows than asked"
             t = t_c[1:] if sub > 1 else s.dt * (first + 1 + np.arange(n_out))  # t_n = n dt, never accumulated
             m = n_out * sub
@@ -423,7 +423,8 @@ class FixedStepPlan(Plan):
         steps took."""
         s = self.settings
         ne, n_q = self.bvec.shape
-        segments, coefs, through, scratch = self._through
+        segments, coefs, scratch = self._through
+        through = kernel("step_through", n_q)
         d, v, u, f, e, fb, whole, take, pick_d, pick_v, pick_f = rows.arrays(scratch)
         nodes = len(levels) + 1
         # the compiled loop checks no bounds: never let it write past an array
@@ -442,21 +443,23 @@ class FixedStepPlan(Plan):
                        np.zeros((N_W, n_q)), np.zeros((n_q, n_q)), d, v, u, f, e, fb, whole, take, pick_d, pick_v,
                        pick_f, taken, True, info)
         wall = time.perf_counter() - tic
-        _raise_on_failure(self.system, s, info)
+        raise_on_failure(self.system, s, info)
         assert done == nodes - 1, "the loop took fewer steps than asked"
         return wall, taken
 
     @functools.cached_property
     def _through(self):
-        """(segments, coefficients, kernel, rows) of step_through: the fine segments as a table
-        (first output step, output steps, substeps each, their coefficients' row, level0), every
-        splitting's coefficients stacked, the compiled loop for n coordinates and the most
-        compute steps of a segment."""
+        """(segments, coefficients, rows) of step_through: the fine segments as a table (first
+        output step, output steps, substeps each, their coefficients' row, level0), every
+        splitting's coefficients stacked, and the most compute steps of a segment."""
         order = sorted(self.coef)
-        segments = np.array([(first, n_out, nsub, order.index(nsub), self.level0[nsub])
-                             for first, n_out, nsub in self.segments(fine=True)], dtype=np.int64).reshape(-1, 5)
-        coefs = np.ascontiguousarray(np.stack([self.coef[k] for k in order]))
-        return segments, coefs, kernel("step_through", self.bvec.shape[1]), int(np.max(segments[:, 1] * segments[:, 2]))
+        rows = [(first, n_out, nsub, order.index(nsub), int(self.level0[nsub]))
+                for first, n_out, nsub in self.segments(fine=True)]
+        segments = np.array(rows, dtype=np.int64).reshape(-1, 5)
+        coefs = np.empty((len(order), *self.coef[order[0]].shape))
+        for k, nsub in enumerate(order):
+            coefs[k] = self.coef[nsub]
+        return segments, coefs, max(n_out * nsub for _, n_out, nsub, _, _ in rows)
 
     def run(self, keep: bool = True, csv=None, compare_every: int | None = None, progress=None,
             tap=None) -> Result:
@@ -563,7 +566,7 @@ def _element_name(system: System, row: int) -> str:
 EXP_RANGE = 20.0
 
 
-def _raise_on_failure(system: System, s: Settings, info: np.ndarray) -> None:
+def raise_on_failure(system: System, s: Settings, info: np.ndarray) -> None:
     status = int(info[kernels.I_STATUS])
     if status == kernels.OK:
         return

@@ -20,7 +20,7 @@ PACKAGE = Path(__file__).resolve().parents[2]
 #: every source file whose code (or constants) the exported kernels compile in
 SOURCES = ("model/hysteresis.py", "model/vrm.py", "model/signals.py", "solve/kernels/layout.py",
            "solve/kernels/elements.py", "solve/kernels/rotations.py", "solve/kernels/loop.py", "solve/kernels/through.py", "solve/kernels/csvfmt.py", "solve/kernels/reduce.py",
-           "solve/kernels/redrive.py", "solve/kernels/modified.py",
+           "solve/kernels/redrive.py", "solve/kernels/modified.py", "solve/kernels/estimate.py",
            "solve/kernels/dop853.py", "solve/kernels/dop853_layout.py", "solve/integrators/steps.py",
            "solve/integrators/chang.py", "solve/integrators/central_difference.py", "solve/integrators/kr_alpha.py",
            "solve/integrators/newmark.py")
@@ -43,6 +43,16 @@ EXPORTS = {
                      "f8[::1], f8[:,:,::1], f8[::1], f8[:,::1], i8[:,::1], f8, f8, i8, f8, i8, f8[::1], f8[:,:,::1], "
                      "f8[:,::1], f8[:,::1], f8[:,::1], f8[:,::1], f8[:,::1], f8[:,::1], f8[:,::1], f8[:,::1], f8[:,::1], "
                      "f8[:,::1], f8[::1], b1[::1], i8[::1], f8[:,::1], f8[:,::1], f8[:,::1], i8[::1], b1, f8[::1])"),
+    "companion_estimate": ("rbhyst.solve.kernels.estimate", "companion_estimate",
+                           "i8(i8, f8[:,:,:,:,::1], UniTuple(f8, {n}), UniTuple(f8, {n}), f8[:,::1], b1, f8[:,::1], "
+                           "f8[::1], i8, f8[::1], f8[:,:,::1], f8[::1], i8[:,::1], f8, f8, i8, f8, i8, i8, f8[:,::1], "
+                           "f8[::1], i8[::1], f8[:,::1], f8[:,::1], f8[:,::1], f8[::1], f8[::1], f8[:,:,::1], f8[:,::1], "
+                           "f8[:,::1], f8[::1], f8[::1], f8[:,::1], i8[::1], i8[::1], f8[::1], i8, i8[::1], f8[:,::1], b1, "
+                           "f8[:,::1], b1, f8[:,:,::1], f8[::1], i8[::1], f8[::1], f8, f8, f8, f8[:,::1], f8[:,::1], "
+                           "f8[:,::1], f8[::1], b1[::1], f8[:,::1], f8[::1], f8[:,:,::1], f8[:,::1], f8[:,::1], f8[:,::1], "
+                           "f8[:,::1], f8[:,::1], f8[:,::1], f8[:,::1], f8[:,::1], f8[:,::1], f8[:,::1], f8[::1], "
+                           "f8[:,::1], b1[::1], f8[:,::1], f8[:,::1], f8[:,::1], i8[::1], f8[:,::1], f8[:,::1], f8[:,::1], "
+                           "f8[::1], f8[::1], f8[:,::1], f8[:,::1], i8[::1], b1, f8[::1])"),
     "integrate": ("rbhyst.solve.kernels.dop853", "_integrate",
                   "i8(UniTuple(f8, {n}), f8[:,::1], f8[::1], i8, f8[::1], f8[:,:,::1], f8[:,::1], f8[::1], f8[:,:,::1], f8[:,::1], "
                   "f8[::1], f8, f8[::1], f8[:,::1], f8[::1], f8, i8, f8[:,::1], f8[::1], f8[::1], f8[::1], "
@@ -65,6 +75,7 @@ EXPORTS = {
     "largest_change": ("rbhyst.solve.kernels.reduce", "largest_change",
                        "void(f8[:,:], f8[:,:], f8[:,:], f8[:,::1], f8[:,::1], b1, f8[::1], f8[:,::1], b1, f8[:,:,::1], "
                        "f8[::1], f8[:,::1])"),
+    "resultant": ("rbhyst.solve.kernels.reduce", "resultant", "void(f8[:,:], f8[:,::1], f8[:,:])"),
     "neglected_terms": ("rbhyst.solve.kernels.reduce", "neglected_terms",
                         "f8(f8[::1], f8[::1], f8[::1], f8[:,::1], f8[::1])"),
 }

@@ -103,10 +103,11 @@ def run_kernels():
     from rbhyst.solve.kernels.csvfmt import _decompose, _render
     from rbhyst.solve.kernels.dop853 import _integrate
     from rbhyst.solve.kernels.loop import run_chunk
-    from rbhyst.solve.kernels.reduce import largest_change, neglected_terms, reduce_rows
+    from rbhyst.solve.kernels.reduce import largest_change, neglected_terms, reduce_rows, resultant
     from rbhyst.solve.kernels.modified import companion_source, source_and_offset
     from rbhyst.solve.kernels.redrive import redrive
+    from rbhyst.solve.kernels.estimate import companion_estimate
     from rbhyst.solve.kernels.through import step_through
 
     return (run_chunk, _decompose, _render, reduce_rows, _integrate, redrive, source_and_offset, neglected_terms,
-            step_through, companion_source, largest_change)
+            step_through, companion_source, largest_change, companion_estimate, resultant)
