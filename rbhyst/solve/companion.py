@@ -279,18 +279,24 @@ def source_and_offset(method: str, a: np.ndarray, v: np.ndarray, t: np.ndarray, 
     return extra, offset
 
 
+def signal_corners(system) -> list[float]:
+    """The times of every analytic signal's start, end and corners (no source within 1.5 h of one)."""
+    from rbhyst.model.records import Series
+
+    return [b for sig in system.excitation.signals.values() if not isinstance(sig, Series) for b in sig.breakpoints]
+
+
 def source_from_run(plan, tap: RunTap):
     """(-S, q' - V) of source_and_offset from the rows and load the run's tap kept, in one compiled
     pass (kernels.modified.companion_source): the method's accelerations M^-1 (p - R - C V) at
     the nodes (the seed's small rotations: R = sum mult b f), each step's h at the level the
     run took it, no source within 1.5 h of an analytic signal's start, end or corner."""
-    from rbhyst.model.records import Series
     from rbhyst.solve.kernels.compiled import kernel
 
     system, s = plan.system, plan.settings
     assert system.rotation_index == SMALL, "the companion's rows are the seed's"
     nodes, n = len(tap.t), system.n
-    breaks = [b for sig in system.excitation.signals.values() if not isinstance(sig, Series) for b in sig.breakpoints]
+    breaks = signal_corners(system)
     extra, offset, a = np.empty((3, nodes, n))
     damped = tap.c is not None
     kernel("companion_source")(MODIFIED[s.integrator], tap.load, tap.v, tap.f, tap.a0, plan.rb,
@@ -310,7 +316,6 @@ def estimate_in_one_call(plan, tap: RunTap, compare_every: int, layout, scales: 
     compiled call (kernels.estimate): (changed, moved, seconds); changed None where the
     adaptive solutions must say it or the estimate is past ``largest``, moved None where the
     probe was not needed."""
-    from rbhyst.model.records import Series
     from rbhyst.solve.kernels import estimate as codes
     from rbhyst.solve.kernels.compiled import kernel
     from rbhyst.solve.kernels.layout import INFO_SIZE, N_E, N_STATE, N_W
@@ -323,10 +328,11 @@ def estimate_in_one_call(plan, tap: RunTap, compare_every: int, layout, scales: 
     ne = plan.bvec.shape[0]
     count = plan.n_steps // compare_every + 1  # (the compared nodes: plan.compared_nodes', in the call)
     segments, coefs, _ = plan._through
-    breaks = [b for sig in system.excitation.signals.values() if not isinstance(sig, Series) for b in sig.breakpoints]
+    breaks = signal_corners(system)
     x0, st0 = plan.initial_state()
     arms, ct, back = layout._change_terms
-    top_c, top_p = np.empty(3 * n + 2 * arms.shape[1] * arms.shape[0] + ne), np.empty(3 * n + 2 * arms.shape[1] * arms.shape[0] + ne)
+    width = 3 * n + 2 * arms.shape[1] * arms.shape[0] + ne  # (Layout.largest_change's columns, kernel rows')
+    top_c, top_p = np.empty(width), np.empty(width)
     info = np.zeros(INFO_SIZE)
     n_q = plan.bvec.shape[1]
     damped = tap.c is not None
