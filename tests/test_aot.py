@@ -80,3 +80,22 @@ def test_a_changed_kernel_source_clears_the_cached_kernels(tmp_path):
     assert (tmp_path / "solve/kernels/__pycache__/loop.f-12.py311.nbi").exists()
     assert clear_stale(tmp_path, sources, "2")
     assert not (tmp_path / "solve/kernels/__pycache__/loop.f-12.py311.nbi").exists()
+
+
+def test_a_plan_calls_its_loop_ahead_only_where_the_jit_compiles_it(monkeypatch):
+    """A numba dispatcher is compiled (or loaded from its cache) when the plan is made, not in
+    the first chunk's time; the extension's loop needs no such call."""
+    from rbhyst.model.deck import load_deck
+    from rbhyst.results import analysis
+    from rbhyst.solve import plan as planning
+    from rbhyst.solve.kernels.compiled import jit_compiled
+    from rbhyst.solve.kernels.loop import run_chunk
+
+    assert jit_compiled(run_chunk)
+    assert not jit_compiled(len)
+    calls = []
+    real = planning.FixedStepPlan._call
+    monkeypatch.setattr(planning.FixedStepPlan, "_call", lambda self, *a, **k: calls.append(a[5]) or real(self, *a, **k))
+    system, settings = analysis.scene(load_deck(DECKS / "seed_wri.toml"))
+    made = analysis.plan(system, settings)
+    assert calls == ([0] if jit_compiled(made._loop) else [])

@@ -15,7 +15,7 @@ import numpy as np
 
 from rbhyst.solve import integrators
 from rbhyst.solve.kernels import layout as kernels
-from rbhyst.solve.kernels.compiled import kernel
+from rbhyst.solve.kernels.compiled import jit_compiled, kernel
 from rbhyst.errors import AnalysisError, InputError, byte_size
 from rbhyst.solve.history import Extremes, Layout, PlotData, Raw, body_spectrum_columns, estimate_columns
 from rbhyst.solve.kernels.layout import N_STATE, N_W, X_CUR, X_ITER, X_LEVEL_USED, X_OMEGA_DT2, X_STEPS, X_SUBSTEPS, n_x, x_slice
@@ -279,8 +279,10 @@ class FixedStepPlan(Plan):
         # unrolls every loop over the coordinates
         self._loop = kernel("run_chunk", self.bvec.shape[1])
         self._mass, self._minv = tuple(system.mass), tuple(self.minv)
-        nsub = next(iter(self.coef))
-        self._call(np.zeros((1, system.n)), 0.0, nsub, s.dt / nsub, nsub, 0, *self.initial_state(), _Buffers(1, ne, system.n))
+        if jit_compiled(self._loop):  # compiled (or loaded from numba's cache) now, not in the first chunk's time
+            nsub = next(iter(self.coef))
+            self._call(np.zeros((1, system.n)), 0.0, nsub, s.dt / nsub, nsub, 0, *self.initial_state(),
+                       _Buffers(1, ne, system.n))
 
     def initial_state(self):
         """The loop's state at t = 0: at rest, elements virgin, and the initial acceleration (new

@@ -82,6 +82,12 @@ def kernel(name: str, n: int | None = None):
     return getattr(importlib.import_module(mod), func)
 
 
+def jit_compiled(func) -> bool:
+    """Whether ``func`` (from :func:`kernel`) is numba's dispatcher, compiled at its first call,
+    not the extension's function."""
+    return hasattr(func, "py_func")
+
+
 def cached(dispatchers) -> bool:
     """Whether numba's cache holds compiled code for these dispatchers' current sources.
 
