@@ -1,9 +1,14 @@
-"""The compiled step of every fixed-step method, and the one place where it is chosen.
+"""The compiled step of every fixed-step method.
 
-Every step has the same inputs and outputs, so the loop (rbhyst.solve.kernels.loop) calls
-``take_step`` and never grows when a method is added: a new method adds its module (its
-coefficients, numpy only), its step here, and one line in ``take_step``. The schemes are
-written out in each method's module docstring.
+Every step has the same inputs and outputs: a new method adds its module (its coefficients,
+numpy only), its step here, and one branch where the loop (rbhyst.solve.kernels.loop) chooses
+the step. The schemes are written out in each method's module docstring.
+
+The explicit steps are inlined into the loop (a call per step made Chang's run of the seed
+deck three times slower); Newmark's is called (see newmark_step). The choice is the loop's own
+branch, not a function of its own inlined into it: numba inlines by copying the callee's whole
+IR once per site, and that function, the three steps inlined in it, was two fifths of the
+loop's compiling.
 
 A step works on vectors of the n coordinates, n = len(minv) (len(mass)): the state (d, v, a)
 it starts from and the one it reaches are rows of the work space ``w``
@@ -159,7 +164,11 @@ def kr_alpha_step(coef, lv, mass, minv, cm, damped, bvec, axial, rot, mult, para
     return True, -1, work
 
 
-@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+# Not inlined, unlike the explicit steps: inlined, its Newton loop (the elements' update and the
+# tangent's assembly inlined in it) was copied into the loop at every compiling, some 30 s of a
+# body's first run on a cold cache; called, the seed deck's Newmark run takes some 9 % longer
+# (15.6-16.3 -> 17.4-17.6 ms), its iterations being most of a step.
+@njit(cache=True, error_model="numpy", _nrt=False)
 def newmark_step(mass, cm, damped, bvec, axial, rot, mult, params, st, cur, w, wm, load, j, w0, w1, h, kpeak, bq, tol,
                  max_iter):
     """One Newmark step solved for d+ by Newton iterations from d + h v + h^2/2 a.
@@ -251,27 +260,3 @@ def newmark_step(mass, cm, damped, bvec, axial, rot, mult, params, st, cur, w, w
         for i in range(n):
             dn[i] += g[i]
     return False, NEWTON_FAILED, 0.0, max_iter
-
-
-@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
-def take_step(method, coef, lv, mass, minv, cm, damped, bvec, axial, rot, mult, params, st, cur, w, wm, load, j, w0,
-              w1, h, kpeak, bq, tol, max_iter):
-    """Advance one (sub)step of size h from the state w[W_D, W_V, W_A] into w[W_DN, W_VN,
-    W_AN]; the load is linear within compute step j of ``load``, the substep spanning the
-    fractions w0 to w1 of it (held in w[W_PA], w[W_PB] after the step). Every step writes R(d+)
-    into w[W_R] (at most 30 arguments: more would make Python pass them as a tuple, which
-    numba cannot inline). rot, axial, bq: the kinematics (elements.update_elements).
-
-    Returns (ok, bad element, element work, iterations).
-    """
-    if method == NEWMARK:
-        return newmark_step(mass, cm, damped, bvec, axial, rot, mult, params, st, cur, w, wm, load, j, w0, w1, h,
-                            kpeak, bq, tol, max_iter)
-    if method == KR_ALPHA:
-        ok, bad, work = kr_alpha_step(coef, lv, mass, minv, cm, damped, bvec, axial, rot, mult, params, st, cur, w, load,
-                                      j, w0, w1, h, kpeak, bq)
-        return ok, bad, work, 1
-    # Chang's method and central difference share their step (their coefficients differ)
-    ok, bad, work = chang_step(coef, lv, mass, minv, cm, damped, bvec, axial, rot, mult, params, st, cur, w, load, j, w0,
-                               w1, h, kpeak, bq)
-    return ok, bad, work, 1

@@ -18,7 +18,7 @@ import math
 
 from numba import njit
 
-from rbhyst.solve.integrators.steps import take_step
+from rbhyst.solve.integrators.steps import KR_ALPHA, NEWMARK, chang_step, kr_alpha_step, newmark_step
 from rbhyst.solve.kernels.layout import (E_HYST, E_IN, E_KIN, E_VISC, F, FB, I_BRANCH, I_DISP, I_ELEMENT, I_OMEGA, I_STATUS, I_STIFFNESS, I_TIME, LOCATED, NEWTON_FAILED, NONFINITE, NOT_CONVERGED, OK, OVERFLOW, S, SPATIAL, U, UNRESOLVED, W_A, W_AN, W_D, W_DN, W_PA, W_PB, W_Q, W_SA, W_SD, W_SV, W_V, W_VN, W_X, W_Z, X_CUR, X_E_HYST, X_E_IN, X_E_VISC, X_ITER, X_LEVEL, X_LEVEL_USED, X_OMEGA_DT2, X_Q, X_STEPS, X_SUBSTEPS)
 from rbhyst.solve.kernels.elements import (copy_rows, copy_vector, omega_squared, omega_squared_exact, row_dot,
                                            turned_dampers)
@@ -108,9 +108,17 @@ def run_chunk(method, coef, mass, minv, cm, damped, bvec, axial, rot, mult, para
                 # load at the ends of the substep, linear within the compute step
                 w0 = k * inv_nsub
                 w1 = (k + 1) * inv_nsub
-                ok, bad, work, its = take_step(
-                    method, coef, level, mass, minv, cm, damped, bvec, axial, rot, mult, params, st, cur, w, wm,
-                    load, j, w0, w1, h, kpeak, bq, newton_tol, newton_max_iter)
+                if method == NEWMARK:
+                    ok, bad, work, its = newmark_step(mass, cm, damped, bvec, axial, rot, mult, params, st, cur, w, wm,
+                                                      load, j, w0, w1, h, kpeak, bq, newton_tol, newton_max_iter)
+                elif method == KR_ALPHA:
+                    ok, bad, work = kr_alpha_step(coef, level, mass, minv, cm, damped, bvec, axial, rot, mult, params,
+                                                  st, cur, w, load, j, w0, w1, h, kpeak, bq)
+                    its = 1
+                else:  # Chang's method and central difference share their step (their coefficients differ)
+                    ok, bad, work = chang_step(coef, level, mass, minv, cm, damped, bvec, axial, rot, mult, params, st,
+                                               cur, w, load, j, w0, w1, h, kpeak, bq)
+                    its = 1
                 iterations += its
                 steps_taken += 1
                 t_now = t0 + (j + w1) * h_c
