@@ -76,12 +76,14 @@ def run(
     from rbhyst.solve.kernels import compiled as kernels
     from rbhyst.model.deck import ANALYSIS_SECTIONS
 
-    if not kernels.cached(kernels.run_kernels()):
-        say("note: compiling the numba kernels, once (a minute at most); later runs load them from the cache")
     monitor = Progress()
     try:
         with user_errors():
             d = api.load_deck(deck, need=ANALYSIS_SECTIONS)
+            adaptive = (integrator or d.analysis.integrator) == "adaptive" or (
+                tolerance if tolerance is not None else d.analysis.tolerance) is not None
+            if not kernels.cached(kernels.run_kernels(adaptive)):
+                say("note: compiling the numba kernels, once (a minute or two); later runs load them from the cache")
             target = out if out is not None else output_dir(d, deck)
             if report:
                 from rbhyst.report.html import check_report_target
@@ -447,7 +449,7 @@ def sweep(
             _quiet_dask()
         # built at install, the kernels need no compiling (and numba's cache stays empty)
         if not on_dask and not ahead_of_time() and not kernels.cached([run_chunk]):
-            say("note: compiling the numba kernels, once (a minute at most); the workers load them from the cache")
+            say("note: compiling the numba kernels, once (a minute or two); the workers load them from the cache")
             from rbhyst.api import run as _run
 
             _run(sw.short_deck())

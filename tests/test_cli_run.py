@@ -350,3 +350,31 @@ def test_help_shows_units_in_brackets():
 
     res = CliRunner().invoke(app, ["run", "--help"])
     assert res.exit_code == 0 and "Override analysis.dt [s]." in " ".join(res.stdout.split())
+
+
+@pytest.mark.parametrize("deck_keys, options, adaptive", [
+    ({}, (), False), ({}, ("--integrator", "adaptive"), True), ({}, ("--tolerance", "0.01"), True),
+    ({"integrator": "adaptive"}, (), True), ({"tolerance": 0.01}, (), True)])
+def test_the_compiling_note_asks_only_for_the_loop_the_run_takes(tmp_path, monkeypatch, deck_keys, options, adaptive):
+    """Where numba's JIT compiles the kernels, the note is said while the loop the run takes (the
+    deck's method, or the command's) is not in numba's cache; not for a kernel the run may never
+    reach (the adaptive loop of a user of chang): it would be said at every run."""
+    from rbhyst.solve.kernels import compiled
+
+    asked = []
+    monkeypatch.setattr(compiled, "ahead_of_time", lambda: False)  # (the run itself keeps its kernels)
+    monkeypatch.setattr(compiled, "cached", lambda dispatchers: asked.append(dispatchers) and False)
+    path = write_deck(tmp_path, seed_deck(duration=0.2, **deck_keys))
+    code, out, err = run("run", path, "--no-plots", *options)
+    assert code == 0, err
+    assert [[d.py_func.__name__ for d in ds] for ds in asked] == [["_integrate" if adaptive else "run_chunk"]]
+    assert err.count("note: compiling the numba kernels, once") == 1
+
+
+def test_a_bad_deck_is_not_told_of_compiling(tmp_path, monkeypatch):
+    from rbhyst.solve.kernels import compiled
+
+    monkeypatch.setattr(compiled, "cached", lambda dispatchers: False)
+    path = write_deck(tmp_path, {**seed_deck(), "body": {"mass": -1.0}})
+    code, out, err = run("run", path, "--no-plots")
+    assert code == 2 and "compiling" not in err, err

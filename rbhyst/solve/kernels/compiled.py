@@ -102,18 +102,17 @@ def cached(dispatchers) -> bool:
         return True
 
 
-def run_kernels():
-    """The dispatchers a fixed-step run loads (none when they were built ahead of time)."""
+def run_kernels(adaptive: bool):
+    """The dispatchers every run of its kind compiles first (none when they were built ahead of
+    time): the fixed-step methods' loop, or the adaptive one's. The kernels a run may or may not
+    reach (its error estimate's, the CSV formatter) are not counted: a note that they are not
+    compiled yet would be said at every run of a user who never needs them."""
     if ahead_of_time():
         return ()
-    from rbhyst.solve.kernels.csvfmt import _decompose, _render
-    from rbhyst.solve.kernels.dop853 import _integrate
-    from rbhyst.solve.kernels.loop import run_chunk
-    from rbhyst.solve.kernels.reduce import largest_change, neglected_terms, reduce_rows, resultant
-    from rbhyst.solve.kernels.modified import companion_source, source_and_offset
-    from rbhyst.solve.kernels.redrive import redrive
-    from rbhyst.solve.kernels.estimate import companion_estimate
-    from rbhyst.solve.kernels.through import step_through
+    if adaptive:
+        from rbhyst.solve.kernels.dop853 import _integrate
 
-    return (run_chunk, _decompose, _render, reduce_rows, _integrate, redrive, source_and_offset, neglected_terms,
-            step_through, companion_source, largest_change, companion_estimate, resultant)
+        return (_integrate,)
+    from rbhyst.solve.kernels.loop import run_chunk
+
+    return (run_chunk,)
