@@ -99,3 +99,20 @@ def test_a_plan_calls_its_loop_ahead_only_where_the_jit_compiles_it(monkeypatch)
     system, settings = analysis.scene(load_deck(DECKS / "seed_wri.toml"))
     made = analysis.plan(system, settings)
     assert calls == ([0] if jit_compiled(made._loop) else [])
+
+
+def test_a_run_under_gravity_loads_no_numba_either(tmp_path):
+    """The static equilibrium's steps (rbhyst.solve.static) are a kernel built at install too."""
+    from conftest import write_deck
+    from test_equipment import hanging_deck
+
+    path = write_deck(tmp_path, hanging_deck())
+    code = ("import json, sys, rbhyst\nfrom rbhyst.solve.kernels.compiled import ahead_of_time\n"
+            "res = rbhyst.run(sys.argv[1])\n"
+            "print(json.dumps([ahead_of_time(), 'numba' in sys.modules, res.summary()['static'] is not None]))")
+    out = subprocess.run([sys.executable, "-c", code, str(path)], cwd=tmp_path, capture_output=True, text=True,
+                         check=True)
+    built, numba, static = json.loads(out.stdout.splitlines()[-1])
+    if not built:
+        pytest.skip("the installed rbhyst has no kernels built ahead of time (an editable install, or no compiler)")
+    assert static and numba is False

@@ -50,6 +50,10 @@ import numpy as np
 
 from rbhyst.solve.kernels.layout import LOCATED, MODIFIED, SMALL, x_slice
 
+#: what kernels.estimate.companion_estimate returns (its DONE, PROBED, FAILED), named here: that
+#: module imports numba, which a run whose kernels were built at install never loads
+ESTIMATE_DONE, ESTIMATE_PROBED, ESTIMATE_FAILED = 0, 1, 6
+
 #: the methods whose modified equation is written out here
 METHODS = tuple(MODIFIED)
 #: the companion keeps every compute step's deformations: at most this many values
@@ -316,7 +320,6 @@ def estimate_in_one_call(plan, tap: RunTap, compare_every: int, layout, scales: 
     compiled call (kernels.estimate): (changed, moved, seconds); changed None where the
     adaptive solutions must say it or the estimate is past ``largest``, moved None where the
     probe was not needed."""
-    from rbhyst.solve.kernels import estimate as codes
     from rbhyst.solve.kernels.compiled import kernel
     from rbhyst.solve.kernels.layout import INFO_SIZE, N_E, N_STATE, N_W
     from rbhyst.solve.plan import raise_on_failure
@@ -353,10 +356,10 @@ def estimate_in_one_call(plan, tap: RunTap, compare_every: int, layout, scales: 
         np.empty((count, n)), np.empty((count, n)), np.empty((count, ne)), top_c, top_p, np.empty((4, n)),
         np.empty((3, n)), np.empty(nodes - 1, dtype=np.int64), True, info)
     wall = time.perf_counter() - tic
-    if code == codes.FAILED:
+    if code == ESTIMATE_FAILED:
         raise_on_failure(system, s, info)
         raise AssertionError("the companion's loop took fewer steps than asked, or the compared nodes are not the run's")
-    if code not in (codes.DONE, codes.PROBED):
+    if code not in (ESTIMATE_DONE, ESTIMATE_PROBED):
         return None, None, wall
     expand = layout.expand_change
-    return expand(top_c), (expand(top_p) if code == codes.PROBED else None), wall
+    return expand(top_c), (expand(top_p) if code == ESTIMATE_PROBED else None), wall

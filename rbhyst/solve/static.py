@@ -37,17 +37,17 @@ def static_equilibrium(system) -> Static:
     """Equilibrium under system.weight (see the module docstring); AnalysisError where the elements
     cannot carry it (their tangent stiffness vanishes or Newton does not converge)."""
     from rbhyst.model.hysteresis import virgin_tangent
-    from rbhyst.solve.kernels.compiled import fresh_jit_cache
-    from rbhyst.solve.kernels.elements import update_elements
+    from rbhyst.solve.kernels.compiled import kernel
 
-    fresh_jit_cache()
-
+    update = kernel("static_update")  # (built at install: a run under gravity loads no numba)
     w = np.asarray(system.weight, dtype=float)
-    bvec = np.ascontiguousarray(system.bvec)
-    params = np.ascontiguousarray(system.params)
-    mult = system.mult
+    bvec = np.ascontiguousarray(system.bvec, dtype=float)
+    params = np.ascontiguousarray(system.params, dtype=float)
+    mult = np.ascontiguousarray(system.mult, dtype=float)
     ne, n = bvec.shape
-    axial, rot = system.kernel_axial, system.rotation_index
+    axial = np.ascontiguousarray(system.kernel_axial, dtype=float)
+    rot = int(system.rotation_index)
+    out = np.zeros(3)
     bq = bvec.copy()  # the rows at q (exact kinematics)
     st = np.zeros((2, ne, kernels.N_STATE))
     for e in range(ne):
@@ -62,7 +62,8 @@ def static_equilibrium(system) -> Static:
         target = w * (k / INCREMENTS)
         for it in range(MAX_ITERATIONS):
             r = np.zeros(n)
-            ok, bad, _, kgeo = update_elements(bvec, axial, rot, mult, params, q, q, st, cur, kpeak, r, bq, n)
+            update(bvec, axial, rot, mult, params, np.ascontiguousarray(q, dtype=float), st, cur, kpeak, r, bq, out)
+            ok, bad, kgeo = out[0] == 1.0, int(out[1]), out[2]
             if not ok:
                 raise AnalysisError(f"static equilibrium under gravity: element row {bad + 1} left its calibrated "
                                     "range (exp overflow): the elements cannot carry the weight")

@@ -78,6 +78,9 @@ EXPORTS = {
     "resultant": ("rbhyst.solve.kernels.reduce", "resultant", "void(f8[:,:], f8[:,::1], f8[:,:])"),
     "neglected_terms": ("rbhyst.solve.kernels.reduce", "neglected_terms",
                         "f8(f8[::1], f8[::1], f8[::1], f8[:,::1], f8[::1])"),
+    "static_update": ("rbhyst.solve.kernels.elements", "static_update",
+                      "void(f8[:,::1], f8[::1], i8, f8[::1], f8[:,:,::1], f8[::1], f8[:,:,::1], i8, f8[:,::1], "
+                      "f8[::1], f8[:,::1], f8[::1])"),
 }
 
 

@@ -209,6 +209,17 @@ def update_elements(bvec, axial, rot, mult, params, q0, q, st, cur, kpeak, r, bq
     return True, -1, work, kgeo
 
 
+@njit(cache=True, error_model="numpy", _nrt=False)
+def static_update(bvec, axial, rot, mult, params, q, st, cur, kpeak, r, bq, out):
+    """update_elements at q, from q (a step of the static path under gravity, rbhyst.solve.static),
+    as a kernel of its own: built at install with the others, so that a run under gravity loads
+    no numba. out (3,): ok (1 or 0), the bad element, the geometric stiffness."""
+    ok, bad, _, kgeo = update_elements(bvec, axial, rot, mult, params, q, q, st, cur, kpeak, r, bq, bvec.shape[1])
+    out[0] = 1.0 if ok else 0.0
+    out[1] = bad
+    out[2] = kgeo
+
+
 @njit(cache=True, error_model="numpy", inline="always", _nrt=False)
 def _turns(st, cur, e, u):
     """Whether element e, which moved along its branch the step before, turns on its way to u
