@@ -481,12 +481,3 @@ def test_the_estimate_in_one_call_is_the_companion_and_its_probe_to_the_bit(tmp_
     planned, tap = _companion(plan(system, settings))
     (_, _), (changed, moved), _ = _python_and_one_call(planned, tap, every, -1.0, 0.999 * worst)
     assert changed is None and moved is None
-
-
-def test_the_companion_reads_the_estimate_kernels_codes_as_the_kernel_names_them():
-    """(named apart in rbhyst.solve.companion: the kernel's module imports numba)"""
-    from rbhyst.solve import companion
-    from rbhyst.solve.kernels import estimate
-
-    assert (companion.ESTIMATE_DONE, companion.ESTIMATE_PROBED, companion.ESTIMATE_FAILED) == (
-        estimate.DONE, estimate.PROBED, estimate.FAILED)

@@ -48,11 +48,8 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from rbhyst.solve.kernels.layout import LOCATED, MODIFIED, SMALL, x_slice
-
-#: what kernels.estimate.companion_estimate returns (its DONE, PROBED, FAILED), named here: that
-#: module imports numba, which a run whose kernels were built at install never loads
-ESTIMATE_DONE, ESTIMATE_PROBED, ESTIMATE_FAILED = 0, 1, 6
+from rbhyst.solve.kernels.layout import (ESTIMATE_DONE, ESTIMATE_FAILED, ESTIMATE_PROBED, LOCATED, MODIFIED, SMALL,
+                                         x_slice)
 
 #: the methods whose modified equation is written out here
 METHODS = tuple(MODIFIED)

@@ -8,7 +8,8 @@ The explicit steps are inlined into the loop (a call per step made Chang's run o
 deck three times slower); Newmark's is called (see newmark_step). The choice is the loop's own
 branch, not a function of its own inlined into it: numba inlines by copying the callee's whole
 IR once per site, and that function, the three steps inlined in it, was two fifths of the
-loop's compiling.
+loop's compiling. A step takes at most 30 arguments (they take 21): past that, Python passes
+them to it as one tuple, and numba cannot inline such a function.
 
 A step works on vectors of the n coordinates, n = len(minv) (len(mass)): the state (d, v, a)
 it starts from and the one it reaches are rows of the work space ``w``

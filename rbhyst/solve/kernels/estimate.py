@@ -19,16 +19,19 @@ import numpy as np
 from numba import njit
 
 from rbhyst.solve.kernels.layout import F, LOCATED, U, X_Q
+# what companion_estimate returns (named in the layout, which a run reads without numba)
+from rbhyst.solve.kernels.layout import ESTIMATE_COMPANION_SPLIT as COMPANION_SPLIT
+from rbhyst.solve.kernels.layout import ESTIMATE_DONE as DONE
+from rbhyst.solve.kernels.layout import ESTIMATE_FAILED as FAILED
+from rbhyst.solve.kernels.layout import ESTIMATE_OUT_OF_RANGE as OUT_OF_RANGE
+from rbhyst.solve.kernels.layout import ESTIMATE_PROBE_SPLIT as PROBE_SPLIT
+from rbhyst.solve.kernels.layout import ESTIMATE_PROBED as PROBED
+from rbhyst.solve.kernels.layout import ESTIMATE_TOO_LARGE as TOO_LARGE
 from rbhyst.solve.kernels.modified import companion_source
 from rbhyst.solve.kernels.redrive import redrive
 from rbhyst.solve.kernels.reduce import largest_change
 from rbhyst.solve.kernels.through import step_through
 
-#: what companion_estimate returns: the companion's estimate alone (at most ``check``), with the
-#: probe's, past ``largest``, or where the adaptive solutions must say it: a step whose Newton
-#: iterations split it further than the run's (the companion's or the probe's), an element the
-#: re-driven forces took out of its range; FAILED: the loop failed (``info`` says how)
-DONE, PROBED, TOO_LARGE, COMPANION_SPLIT, OUT_OF_RANGE, PROBE_SPLIT, FAILED = range(7)
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)

@@ -32,6 +32,15 @@ U, F, S, G, K, A, UP, FB = range(8)  # UP: the deformation a step before (LOCATE
 #: force re-driven on the new branch (the turn put before the node, not after it); else NaN
 N_STATE = 8
 
+#: what kernels.estimate.companion_estimate returns: the companion's estimate alone (at most
+#: ``check``), with the probe's, past ``largest``, or where the adaptive solutions must say it: a
+#: step whose Newton iterations split it further than the run's (the companion's or the probe's),
+#: an element the re-driven forces took out of its range; ESTIMATE_FAILED: the loop failed
+#: (``info`` says how). Here, not in that kernel's module, which imports numba: a run whose
+#: kernels were built at install reads them without it (rbhyst.solve.companion)
+(ESTIMATE_DONE, ESTIMATE_PROBED, ESTIMATE_TOO_LARGE, ESTIMATE_COMPANION_SPLIT, ESTIMATE_OUT_OF_RANGE,
+ ESTIMATE_PROBE_SPLIT, ESTIMATE_FAILED) = range(7)
+
 # info: how a chunk ended
 I_STATUS, I_ELEMENT, I_TIME, I_STIFFNESS, I_OMEGA, I_DISP, I_BRANCH = range(7)
 INFO_SIZE = 7
