@@ -33,7 +33,6 @@ from rbhyst.solve.kernels.reduce import largest_change
 from rbhyst.solve.kernels.through import step_through
 
 
-
 @njit(cache=True, error_model="numpy", _nrt=False)
 def _zero(a):
     for i in range(a.shape[0]):
