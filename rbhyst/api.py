@@ -40,6 +40,7 @@ def run(deck: Deck | str | Path, integrator: str | None = None, dt: float | None
     ``update(done, total, label)`` (how far it is), for a caller that shows them as it goes.
     """
     from rbhyst.results.analysis import analyse, deck_of, plan, scene
+    from rbhyst.results.writers import deck_as_run
 
     d = deck_of(deck)
     system, settings = scene(d, integrator=integrator, dt=dt, tolerance=tolerance, estimate=estimate)
@@ -87,17 +88,6 @@ def modes(deck: Deck | str | Path) -> dict:
 
     d = deck if isinstance(deck, Deck) else load_deck(deck, need=MODES_SECTIONS)
     return modes_summary(assemble(d, d.base, run=False))
-
-
-def deck_as_run(deck: Deck, **overrides) -> dict:
-    """The deck's keys as given, with the run's overrides (integrator, dt, tolerance,
-    estimate_error) in [analysis]: what summary.json keeps of the deck, so that a report can
-    show what ran."""
-    data = deck.model_dump(mode="json", exclude_unset=True)
-    given = {k: v for k, v in overrides.items() if v is not None}
-    if given:
-        data.setdefault("analysis", {}).update(given)
-    return data
 
 
 def write(result: Result, out: str | Path, plots: bool = True) -> Path:

@@ -86,13 +86,13 @@ def run(
                 say("note: compiling the numba kernels, once (a minute or two); later runs load them from the cache")
             target = out if out is not None else output_dir(d, deck)
             if report:
-                from rbhyst.report.html import check_report_target
+                from rbhyst.report.report_file import check_report_target
 
                 check_report_target(target)
             result = api.run(d, integrator=integrator, dt=dt, out=target, plots=plots and d.output.plots,
                              tolerance=tolerance, monitor=monitor)
             if report:
-                from rbhyst.report.html import write_report
+                from rbhyst.report.report_file import write_report
 
                 write_report(target)
     finally:
@@ -438,7 +438,7 @@ def sweep(
         sw = load_sweep(sweep_file)
         target = out if out is not None else sw.default_out()
         if report:
-            from rbhyst.report.html import check_report_target
+            from rbhyst.report.report_file import check_report_target
 
             check_report_target(target)
         from rbhyst.solve.kernels.compiled import ahead_of_time
@@ -495,7 +495,7 @@ def sweep(
                 outdir.received.clear()
                 raise typer.Exit(128 + exc.signum) from None
         if report:
-            from rbhyst.report.html import write_report
+            from rbhyst.report.report_file import write_report
 
             write_report(target)
     failed = outcome.failed
@@ -536,13 +536,15 @@ def _quiet_dask() -> None:
 
 @app.command(cls=Command)
 def report(
-    folder: Annotated[Path, typer.Argument(metavar="OUT_FOLDER", help="A folder rbhyst run or rbhyst sweep wrote.")],
+    folder: Annotated[Path, typer.Argument(metavar="OUT_FOLDER",
+                                           help="A folder rbhyst run, rbhyst sweep or rbhyst qualify wrote.")],
 ):
-    """One self-contained report.html of a run's or a sweep's results (figures embedded), to send and print.
+    """One self-contained report.html of a run's, a sweep's or a qualification's results (figures
+    embedded), to send and print.
 
-    It is added to the folder's files: the run's or the sweep's own stay as they are.
+    It is added to the folder's files: the command's own stay as they are.
     """
-    from rbhyst.report.html import write_report
+    from rbhyst.report.report_file import write_report
 
     with user_errors():
         path = write_report(folder)
@@ -807,6 +809,7 @@ def qualify(
     out: Annotated[Optional[Path], typer.Option(
         "--out", help="Output folder (default: the deck's output folder + '-qualify').")] = None,
     plots: Annotated[bool, typer.Option("--plots/--no-plots", help="Write qualification.png.")] = True,
+    report: Annotated[bool, typer.Option("--report", help="Also write report.html (see `rbhyst report`).")] = False,
 ):
     """The verdict of a deck against a required response spectrum: qualification.json and .png.
 
@@ -825,6 +828,10 @@ def qualify(
                           "motion_dt": motion_dt})
         target = out if out is not None else _sibling_dir(d, deck, "-qualify")
         check_free(target, output_files(req) + (["qualification.png"] if plots and d.output.plots else []))
+        if report:
+            from rbhyst.report.report_file import check_report_target
+
+            check_report_target(target)
         with staged_directory(target) as tmp:
             v = judge(d, req, tmp, integrator=integrator, dt=dt, tolerance=tolerance, say=say)
             if plots and d.output.plots:
@@ -832,6 +839,10 @@ def qualify(
 
                 plot_verdict(v.checks, req.rrs, v.criteria, v.passed, tmp / "qualification.png",
                              title=d.title or "", notes=v.heading, space="x3" in req.axes)
+        if report:
+            from rbhyst.report.report_file import write_report
+
+            write_report(target)
     for line in verdict_lines(v):
         say(line)
     say(f"wrote {target}")

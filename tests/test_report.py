@@ -164,7 +164,7 @@ def test_report_refuses_what_is_not_a_results_folder_or_not_its_own(run_folder, 
     assert code == 2 and err.splitlines() == [f"error: {tmp_path / 'nowhere'}: no such folder"]
     (tmp_path / "notes").mkdir()
     code, err = invoke("report", tmp_path / "notes")
-    assert code == 2 and err.startswith(f"error: {tmp_path / 'notes'}: holds no results of rbhyst run or rbhyst sweep")
+    assert code == 2 and err.startswith(f"error: {tmp_path / 'notes'}: holds no results of rbhyst run, rbhyst sweep or rbhyst qualify")
     out = tmp_path / "out"
     shutil.copytree(run_folder[0], out)
     manifest = json.loads((out / ".rbhyst.json").read_text())
@@ -210,18 +210,88 @@ def test_a_sweep_report_holds_its_statistics_and_fragility(sweep_folder):
     assert "fragility.png" in {i["data-file"] for i in page.images}
 
 
+@pytest.fixture(scope="module")
+def qualification_folder(tmp_path_factory):
+    """The sample cabinet qualified to AC156 on two motions, with --report."""
+    folder = tmp_path_factory.mktemp("qualification_report") / "q"
+    code, err = invoke("qualify", DECKS / "cabinet_qualify.toml", "--out", folder, "--motions", "2", "--report")
+    assert code == 0, err
+    return folder
+
+
+def test_a_qualification_report_holds_its_verdict_criteria_spectra_and_runs(qualification_folder):
+    folder = qualification_folder
+    q = json.loads((folder / "qualification.json").read_text())
+    page = check_page(folder)
+    srcs = {a["data-src"] for a, _ in page.numbers}
+    assert {s.split(":")[0] for s in srcs} == {"qualification.json", "run_1/summary.json", "run_2/summary.json"}
+    # every criterion: its demand, capacity, margin and each motion's demand
+    for i, c in enumerate(q["criteria"]):
+        for key in ("demand", "capacity", "margin", "per_motion.0", "per_motion.1"):
+            assert f"qualification.json:criteria.{i}.{key}" in srcs
+    # each motion's TRS against the RRS on every axis, and each run's accuracy
+    for m in range(2):
+        for axis in ("x1", "x2"):
+            for key in ("min_ratio", "max_ratio", "peak_g", "peak_min_g"):
+                assert f"qualification.json:motions.{m}.axes.{axis}.trs.{key}" in srcs
+        assert f"qualification.json:accuracy.per_motion.{m}.estimated_error" in srcs
+        assert f"run_{m + 1}/summary.json:peaks.top_at1_m_s2" in srcs  # the point the limits are set at
+    text = " ".join(page.text)
+    assert "The deck qualifies to ICC-ES AC156" in text and text.count("not met") == 0
+    # the deck as run, read back as TOML, is qualification.json's
+    assert len(page.pre) == 1 and tomllib.loads(page.pre[0]) == q["deck_as_run"]
+    assert q["deck_as_run"]["qualify"]["standard"] == "ac156"
+    assert "motion 2: x1 = motions/m2_x1.csv, x2 = motions/m2_x2.csv" in text
+
+
+def test_a_failed_verdict_says_which_condition_failed(qualification_folder, tmp_path):
+    folder = tmp_path / "q"
+    shutil.copytree(qualification_folder, folder)
+    q = json.loads((folder / "qualification.json").read_text())
+    c = q["criteria"][5]
+    c["capacity"] = c["demand"] / 2
+    c["margin"], c["pass"], q["pass"] = 1 - c["demand"] / c["capacity"], False, False
+    (folder / "qualification.json").write_text(json.dumps(q, indent=2) + "\n")
+    code, err = invoke("report", folder)
+    assert code == 0, err
+    page = check_page(folder)
+    text = " ".join(page.text)
+    assert "The deck does not qualify to ICC-ES AC156" in text and "FAIL" in text
+    assert text.count("not met") == 1 and "exceeded" in text
+    assert f"{len(q['criteria']) - 1} of {len(q['criteria'])}" in text
+    # the least margin at a glance is the failed criterion's
+    glance = [a["data-src"] for a, _ in page.numbers if a["data-src"].endswith(".margin")][0]
+    assert glance == "qualification.json:criteria.5.margin"
+
+
+def test_a_report_of_a_body_in_space_gives_its_points_vertical_accelerations(tmp_path):
+    shutil.copytree(DECKS / "records", tmp_path / "records")
+    d = tomllib.loads((DECKS / "cabinet_3d.toml").read_text())
+    d["analysis"]["duration"] = 0.5
+    deck = tmp_path / "deck.toml"
+    deck.write_text(tomli_w.dumps(d))
+    code, err = invoke("run", deck, "--out", tmp_path / "out", "--no-plots", "--report")
+    assert code == 0, err
+    page = check_page(tmp_path / "out")
+    srcs = {a["data-src"] for a, _ in page.numbers}
+    for name in ("top1", "top2", "top3", "top4"):
+        assert {f"summary.json:peaks.{name}_at{k}_m_s2" for k in "123"} <= srcs
+        assert {f"summary.json:peaks.{name}_u{k}_m" for k in "123"} <= srcs
+    assert "peak |at3| [m/s2]" in page.text
+
+
 def _chromium() -> str | None:
     return shutil.which("chromium") or shutil.which("chromium-browser") or shutil.which("google-chrome")
 
 
-@pytest.mark.parametrize("which", ["run", "sweep"])
-def test_a_browser_renders_it(which, run_folder, sweep_folder, tmp_path):
+@pytest.mark.parametrize("which", ["run", "sweep", "qualification"])
+def test_a_browser_renders_it(which, run_folder, sweep_folder, qualification_folder, tmp_path):
     browser = _chromium()
     if browser is None:
         pytest.skip("no chromium on this machine")
     import matplotlib.image
 
-    folder = run_folder[0] if which == "run" else sweep_folder
+    folder = {"run": run_folder[0], "sweep": sweep_folder, "qualification": qualification_folder}[which]
     shot, pdf = tmp_path / "shot.png", tmp_path / "report.pdf"
     common = [browser, "--headless", "--no-sandbox", "--disable-gpu", "--hide-scrollbars",
               f"--user-data-dir={tmp_path / 'profile'}"]

@@ -1,4 +1,6 @@
-"""report.html: one self-contained page of a run's or a sweep's results, to send and to print.
+"""report.html's pages of a run's and a sweep's results, and the pieces every page is made of
+(rbhyst.report.qualification_page makes a qualification's; rbhyst.report.report_file writes
+the file).
 
 Every number is read from the folder's own files (summary.json, sweep.json, the CSVs) and shown
 as it is there: each carries its source and its exact value in ``data-src`` and ``data-value``,
@@ -18,7 +20,6 @@ from rbhyst._version import __version__
 from rbhyst.errors import InputError
 from rbhyst.model.deck import ACCEL_UNITS
 
-REPORT_FILE = "report.html"
 G = ACCEL_UNITS["g"]  # m/s2 (a g column beside m/s2 only; every value in m/s2 is summary.json's)
 
 #: a run's figures in the order the report shows them (others the folder lists follow)
@@ -53,7 +54,7 @@ ul.warnings li { color: var(--warn); background: var(--warnbg); margin: 3px 0; p
 ul.warnings, ul.notes { padding-left: 0; }
 ul.notes li { list-style: none; margin: 3px 0; padding: 3px 8px; border-left: 4px solid var(--rule);
               color: var(--muted); }
-p.ok { color: var(--ok); }
+.ok { color: var(--ok); }
 figure { margin: 12px 0 20px; text-align: center; }
 figure img { max-width: 100%; height: auto; border: 1px solid var(--rule); }
 figcaption { color: var(--muted); font-size: 12px; margin-top: 4px; }
@@ -134,8 +135,8 @@ def page(title: str, subtitle: str, body: list[str]) -> str:
             f"<title>{esc(title)}</title><style>{CSS}</style></head><body>"
             f"<header><h1>{esc(title)}</h1><p class=\"sub\">{esc(subtitle)}</p></header>"
             + "\n".join(body)
-            + f"<footer>Written by rbhyst {esc(__version__)} from the files of this folder (summary.json, "
-              "sweep.json and the CSVs, as listed in .rbhyst.json); every figure is one of its PNGs.</footer>"
+            + f"<footer>Written by rbhyst {esc(__version__)} from the files of this folder, as listed in "
+              ".rbhyst.json: every number names the file it is read from, every figure is one of its PNGs.</footer>"
               "</body></html>\n")
 
 
@@ -209,50 +210,17 @@ def _toml_table(data: dict, path: tuple, lines: list[str]) -> None:
                 _toml_table(item, sub, lines)
 
 
-# ---------------------------------------------------------------- the folder
+# ---------------------------------------------------------------- reading the folder
 
 
-def write_report(folder: str | Path) -> Path:
-    """Write report.html into a results folder of ``rbhyst run`` or ``rbhyst sweep`` and list it
-    in the folder's manifest beside the files already there (which stay)."""
-    from rbhyst.files.outdir import read_manifest, staged_directory
-
-    folder = Path(folder)
-    if not folder.is_dir():
-        raise InputError(f"{folder}: {'is not a folder' if folder.exists() else 'no such folder'}")
-    owned = read_manifest(folder).files
-    if {"summary.json", "time_history.csv"} <= owned and (folder / "summary.json").is_file():
-        text = run_report(folder, owned)
-    elif {"sweep.json", "cases.csv"} <= owned and (folder / "sweep.json").is_file():
-        text = sweep_report(folder, owned)
-    else:
-        raise InputError(f"{folder}: holds no results of rbhyst run or rbhyst sweep (summary.json or sweep.json "
-                         "written by rbhyst, listed in .rbhyst.json): give the folder a run or a sweep wrote")
-    with staged_directory(folder, add=True) as tmp:
-        (tmp / REPORT_FILE).write_text(text, encoding="utf-8")
-    return folder / REPORT_FILE
-
-
-def check_report_target(folder: str | Path) -> None:
-    """Before a run or a sweep with --report: a report.html there is rbhyst's or absent (the
-    command stops before it runs, as it would for its own files)."""
-    from rbhyst.files.outdir import MANIFEST, read_manifest
-
-    folder = Path(folder)
-    path = folder / REPORT_FILE
-    if folder.is_dir() and (path.exists() or path.is_symlink()) and REPORT_FILE not in read_manifest(folder).files:
-        raise InputError(f"{folder}: {REPORT_FILE} exists and rbhyst did not write it (not listed in {MANIFEST}); "
-                         "rbhyst will not overwrite it: move it away or choose another output folder")
-
-
-def _load_json(path: Path) -> dict:
+def load_json(path: Path) -> dict:
     try:
         return json.loads(path.read_text(encoding="utf-8"))
     except (OSError, ValueError) as exc:
         raise InputError(f"{path}: cannot be read as JSON ({exc.__class__.__name__})") from None
 
 
-def _pngs(folder: Path, owned: set[str], order: tuple[str, ...]) -> list[str]:
+def figure_names(folder: Path, owned: set[str], order: tuple[str, ...]) -> list[str]:
     have = sorted(n for n in owned if n.endswith(".png") and "/" not in n and (folder / n).is_file())
     first = [n for n in order if n in have]
     return first + [n for n in have if n not in first]
@@ -262,7 +230,7 @@ def _pngs(folder: Path, owned: set[str], order: tuple[str, ...]) -> list[str]:
 
 
 def run_report(folder: Path, owned: set[str]) -> str:
-    s = _load_json(folder / "summary.json")
+    s = load_json(folder / "summary.json")
     src = "summary.json"
     peaks, ext = s.get("peaks", {}), s.get("extremes", {})
     an, en, acc = s.get("analysis", {}), s.get("energy", {}), s.get("accuracy")
@@ -296,8 +264,8 @@ def run_report(folder: Path, owned: set[str]) -> str:
         body.append("<h3>Notes</h3>" + items(notes, "notes"))
     body.append(_accuracy(acc, en))
     body.append(_model(folder, owned, s))
-    body.append(_peaks(s))
-    figures = [n for n in _pngs(folder, owned, RUN_FIGURES) if n != "model.png"]
+    body.append(peaks_section(s))
+    figures = [n for n in figure_names(folder, owned, RUN_FIGURES) if n != "model.png"]
     body.append('<section class="page"><h2>Figures</h2>'
                 + ("".join(figure(folder, n) for n in figures) if figures else
                    '<p class="muted">The run wrote no figures (--no-plots or output.plots = false).</p>')
@@ -429,8 +397,7 @@ def _place_heads(space: bool) -> list[str]:
     return ["x1 [m] from G", "x2 [m] from G", "angle [deg]"]
 
 
-def _extreme_rows(s: dict, columns: list[str], g_column: bool) -> list[list[str]]:
-    src = "summary.json"
+def _extreme_rows(s: dict, columns: list[str], g_column: bool, src: str = "summary.json") -> list[list[str]]:
     rows = []
     for c in columns:
         e = s["extremes"][c]
@@ -445,18 +412,18 @@ def _extreme_rows(s: dict, columns: list[str], g_column: bool) -> list[list[str]
     return rows
 
 
-def _peaks(s: dict) -> str:
-    src = "summary.json"
+def peaks_section(s: dict, src: str = "summary.json", title: str = "Peaks and extremes") -> str:
+    """The peaks and extremes of a run's summary.json (``src``: its path in the folder)."""
     peaks = s.get("peaks", {})
     head = ["", "peak |x|", "peak [g]", "max", "at t [s]", "min", "at t [s]"]
-    out = ['<section class="page"><h2>Peaks and extremes</h2>',
+    out = [f'<section class="page"><h2>{esc(title)}</h2>',
            "<p>Over every step of dt (whatever output.every keeps). Accelerations are total (what an "
            "accelerometer reads); the g column is the m/s2 value divided by 9.80665.</p>"]
     body = [c for c in ("u1_m", "u2_m", "u3_m", "theta1_rad", "theta2_rad", "theta3_rad", "at1_m_s2", "at2_m_s2",
                         "at3_m_s2", "alphat1_rad_s2", "alphat2_rad_s2", "alphat3_rad_s2", "R1_N", "R2_N", "R3_N",
                         "R3_Nm", "R4_Nm", "R5_Nm", "R6_Nm", "ag1_m_s2", "ag2_m_s2", "ag3_m_s2") if c in peaks]
     out.append("<h3>The body at G, the mounts' resultant, the support</h3>"
-               + table(head, _extreme_rows(s, body, True), set(range(1, 7))))
+               + table(head, _extreme_rows(s, body, True, src), set(range(1, 7))))
     # elements: one row per element of the CSV, with its entry's stroke utilization
     rows, k = [], 1
     for i, e in enumerate(s.get("elements", [])):
@@ -477,18 +444,20 @@ def _peaks(s: dict) -> str:
     if not names:  # an older summary: the points from the columns
         names = sorted({c[: -len("_at1_m_s2")] for c in peaks if c.endswith("_at1_m_s2") and c != "at1_m_s2"})
     if names:
+        # every direction the points move in: x1, x2 in the plane, and x3 in space
+        axes = [k for k in "123" if any(f"{n}_at{k}_m_s2" in peaks for n in names)]
         rows = []
         for n in names:
             row = [n]
-            for c in (f"{n}_at1_m_s2", f"{n}_at2_m_s2"):
+            for c in (f"{n}_at{k}_m_s2" for k in axes):
                 row += [num(peaks.get(c), f"{src}:peaks.{c}"),
                         f'<td class="num">{esc(fmt(peaks[c] / G))}</td>' if c in peaks else num(None, "")]
-            row += [num(peaks.get(f"{n}_u1_m"), f"{src}:peaks.{n}_u1_m"),
-                    num(peaks.get(f"{n}_u2_m"), f"{src}:peaks.{n}_u2_m")]
+            row += [num(peaks.get(f"{n}_u{k}_m"), f"{src}:peaks.{n}_u{k}_m") for k in axes]
             rows.append(row)
+        head = ["point", *[h for k in axes for h in (f"peak |at{k}| [m/s2]", "[g]")],
+                *[f"peak |u{k}| [m]" for k in axes]]
         out.append("<h3>Points of interest: peak total accelerations</h3>"
-                   + table(["point", "peak |at1| [m/s2]", "[g]", "peak |at2| [m/s2]", "[g]", "peak |u1| [m]",
-                            "peak |u2| [m]"], rows, set(range(1, 7))))
+                   + table(head, rows, set(range(1, len(head)))))
     dampers = [c for c in peaks if c.startswith("d") and c.endswith("_f_N")]
     if dampers:
         rows = [[c[: -len("_f_N")], num(peaks[c], f"{src}:peaks.{c}"),
@@ -524,7 +493,7 @@ def _analysis(s: dict) -> str:
 
 
 def sweep_report(folder: Path, owned: set[str]) -> str:
-    about = _load_json(folder / "sweep.json")
+    about = load_json(folder / "sweep.json")
     src = "sweep.json"
     c_head, c_rows = read_csv(folder / "cases.csv")
     ci = {h: i for i, h in enumerate(c_head)}
@@ -564,7 +533,7 @@ def sweep_report(folder: Path, owned: set[str]) -> str:
     body.append(_statistics(folder, vary))
     if "fragility.csv" in owned and (folder / "fragility.csv").is_file():
         body.append(_fragility(folder, owned, about.get("fragility") or {}, vary))
-    figures = [n for n in _pngs(folder, owned, SWEEP_FIGURES) if n != "fragility.png"]
+    figures = [n for n in figure_names(folder, owned, SWEEP_FIGURES) if n != "fragility.png"]
     body.append('<section class="page"><h2>Figures</h2>'
                 + ("".join(figure(folder, n) for n in figures) if figures else
                    '<p class="muted">The sweep wrote no figures (--no-plots).</p>') + "</section>")

@@ -14,6 +14,7 @@ import numpy as np
 from rbhyst.solve.result import Result
 
 if TYPE_CHECKING:  # pragma: no cover
+    from rbhyst.model.deck import Deck
     from rbhyst.solve.located import LocatedSpectra
 
 
@@ -146,6 +147,17 @@ def write_csv(result: Result, path: Path) -> None:
     finally:
         w.close()
         w.wait()
+
+
+def deck_as_run(deck: Deck, **overrides) -> dict:
+    """The deck's keys as given, with the run's overrides (integrator, dt, tolerance,
+    estimate_error) in [analysis]: what summary.json keeps of the deck, so that a report can
+    show what ran."""
+    data = deck.model_dump(mode="json", exclude_unset=True)
+    given = {k: v for k, v in overrides.items() if v is not None}
+    if given:
+        data.setdefault("analysis", {}).update(given)
+    return data
 
 
 def write_summary(result: Result, path: Path) -> None:

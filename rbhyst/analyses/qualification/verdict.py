@@ -205,7 +205,7 @@ def qualify(deck, req: Request, folder: Path, integrator: str | None = None, dt:
     from rbhyst._version import __version__
     from rbhyst.model.system import assemble
     from rbhyst.results.analysis import run_deck
-    from rbhyst.results.writers import write_summary
+    from rbhyst.results.writers import deck_as_run, write_summary
 
     folder = Path(folder).resolve()  # the runs' decks name the motions' files from their own folder
     runs = []  # (label, summary dict)
@@ -279,6 +279,8 @@ def qualify(deck, req: Request, folder: Path, integrator: str | None = None, dt:
         "warnings": warnings,
         "notes": notes,
         "runs": [{"motion": label, "summary": f"run_{k}/summary.json"} for k, (label, _) in enumerate(runs, start=1)],
+        # the deck as given, with the command's overrides (each made motion takes excitation.support's place)
+        "deck_as_run": deck_as_run(deck, integrator=integrator, dt=dt, tolerance=tolerance),
     }
     (folder / "qualification.json").write_text(json.dumps(data, indent=2) + "\n", encoding="utf-8")
     est = accuracy["estimated_error"]
