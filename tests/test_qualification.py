@@ -459,11 +459,24 @@ def test_a_run_that_cannot_vouch_for_its_accuracy_cannot_pass(tmp_path):
 
 def test_the_decks_own_motion_is_checked_against_the_rrs(tmp_path):
     deck = _cabinet(tmp_path)
-    code, err = invoke("qualify", deck, "--out", tmp_path / "q", "--motions", "deck", "--no-plots")
+    code, err = invoke("qualify", deck, "--out", tmp_path / "q", "--motions", "deck", "--no-plots", "--report")
     q = json.loads((tmp_path / "q" / "qualification.json").read_text())
     # the sample's synthetic records are no AC156 motion at 1 g: their TRS lies far below
     assert code == 1 and not q["trs"]["pass"] and q["motions"][0]["trs"]["x1"]["max_ratio"] < 0.9
-    assert "fail: the motions' TRS is not within the RRS's band (trs.csv)" in err.splitlines()
+    # (no trs.csv without made motions: the console names where the TRS is)
+    assert not (tmp_path / "q" / "trs.csv").exists()
+    assert ("fail: the motions' TRS is not within the RRS's band (qualification.json, qualification.png)"
+            in err.splitlines())
+    # its report: every number its files', the TRS of the deck's own motion, and why it fails
+    from test_report import check_page
+
+    page = check_page(tmp_path / "q")
+    srcs = {a["data-src"] for a, _ in page.numbers}
+    assert {f"qualification.json:motions.0.trs.{axis}.{key}" for axis in ("x1", "x2")
+            for key in ("min_ratio", "max_ratio", "peak_g")} <= srcs
+    text = " ".join(page.text)
+    assert "The deck does not qualify to ICC-ES AC156" in text and "the deck's excitation.support" in text
+    assert "trs.csv" not in text and "The deck's own motion: peaks and extremes" in text
 
 
 def test_qualify_against_ieee693_from_the_deck_and_the_command_line(tmp_path):

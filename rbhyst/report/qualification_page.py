@@ -39,7 +39,8 @@ def qualification_report(folder: Path, owned: set[str]) -> str:
                    '<p class="muted">The qualification wrote no figure (--no-plots or output.plots = false).</p>')
                 + "</section>")
     for label, src, s in runs:
-        body.append(peaks_section(s, src, f"{label[:1].upper()}{label[1:]}: peaks and extremes ({src})"))
+        label = "The deck's own motion" if label == "deck" else f"{label[:1].upper()}{label[1:]}"
+        body.append(peaks_section(s, src, f"{label}: peaks and extremes ({src})"))
     body.append(_deck(q))
     title = next((s.get("title") for _, _, s in runs if s.get("title")), None) or "rbhyst qualify"
     return page(title, f"Qualification to {standard}, rbhyst {q.get('rbhyst_version', '')}: results in "
@@ -92,11 +93,12 @@ def _verdict(q: dict, standard: str) -> str:
         (not over, f"Every criterion is within its capacity ({len(criteria) - len(over)} of {len(criteria)})."),
     ]
     passed = bool(q.get("pass"))
+    missed = sum(1 for ok, _ in conditions if not ok)
     lines = "".join(f'<li><span class="{"ok" if ok else "bad"}">{"met" if ok else "not met"}</span>: {esc(text)}</li>'
                     for ok, text in conditions)
     head = (f'<p class="ok"><b>The deck qualifies to {esc(standard)}</b>: every condition below is met.</p>' if passed
-            else f'<p class="bad"><b>The deck does not qualify to {esc(standard)}</b>: it takes every condition '
-                 'below.</p>')
+            else f'<p class="bad"><b>The deck does not qualify to {esc(standard)}</b>: a pass needs every condition '
+                 f'below, and {missed} {"is" if missed == 1 else "are"} not met.</p>')
     return f"<section><h2>Verdict</h2>{head}<ul>{lines}</ul></section>"
 
 
@@ -155,9 +157,10 @@ def _spectra(q: dict) -> str:
                          num(t.get("peak_g"), f"{tp}.peak_g"), num(t.get("peak_min_g"), f"{tp}.peak_min_g"),
                          '<td class="ok">yes</td>' if t.get("pass") else '<td class="bad">no</td>',
                          num(facts.get("strong_motion_s"), f"{p}.strong_motion_s")])
+    every = " (trs.csv holds every frequency)" if any("axes" in m for m in q.get("motions", [])) else ""
     out.append("<h3>The motions' test response spectra (TRS)</h3>"
                "<p>The TRS over the RRS at each 1/6-octave check frequency: its lowest and highest, and where; "
-               "each motion's peak acceleration against the least it may be (trs.csv holds every frequency).</p>"
+               f"each motion's peak acceleration against the least it may be{every}.</p>"
                + table(["motion", "axis", "record", "lowest TRS/RRS", "at [Hz]", "highest TRS/RRS", "at [Hz]",
                         "peak [g]", "least peak [g]", "within", "strong motion [s]"], rows, set(range(3, 9)) | {10}))
     correlations = [(m, motion) for m, motion in enumerate(q.get("motions", [])) if "correlation_x1_x2" in motion]

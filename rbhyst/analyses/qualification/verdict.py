@@ -394,10 +394,13 @@ def verdict_lines(v: Verdict) -> list[str]:
     for c in v.criteria:
         if not c["pass"]:
             lines.append(f"fail: {c['label']}: {c['demand']:.4g} {c['unit']} > {c['capacity']:.4g} {c['unit']}")
+    # where every check frequency's TRS is: trs.csv of made motions; the deck's own motion's in
+    # qualification.json (its lowest and highest) and qualification.png
+    where = "trs.csv" if any("files" in m for m in d["motions"]) else "qualification.json, qualification.png"
     if not d["trs"]["within_band"]:
-        lines.append("fail: the motions' TRS is not within the RRS's band (trs.csv)")
+        lines.append(f"fail: the motions' TRS is not within the RRS's band ({where})")
     if not d["trs"]["peak_pass"]:
-        lines.append("fail: a motion's peak acceleration is below the least the RRS asks for (trs.csv)")
+        lines.append(f"fail: a motion's peak acceleration is below the least the RRS asks for ({where})")
     acc = d["accuracy"]
     if not acc["pass"]:
         worst = acc["estimated_error"]
