@@ -441,7 +441,8 @@ def peaks_section(s: dict, src: str = "summary.json", title: str = "Peaks and ex
                                             "max deformation [m]", "min deformation [m]", "stroke used",
                                             "at t [s]"], rows, set(range(2, 8))))
     names = [p["name"] for p in (s.get("deck") or {}).get("output", {}).get("points") or []]
-    if not names:  # an older summary: the points from the columns
+    # a summary without its deck (an older one, a qualification's run): the points from the columns
+    if not names:
         names = sorted({c[: -len("_at1_m_s2")] for c in peaks if c.endswith("_at1_m_s2") and c != "at1_m_s2"})
     if names:
         # every direction the points move in: x1, x2 in the plane, and x3 in space
