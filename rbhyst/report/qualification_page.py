@@ -1,10 +1,10 @@
 """report.html of a qualification (``rbhyst qualify``): the verdict and what it rests on.
 
-The verdict first, with the condition each part of it met or missed; then every criterion's
-demand, capacity and margin (per motion too); the required response spectrum and how each
-motion's test response spectrum met it; each run's accuracy; the figures; each run's peaks;
-the deck as run. Every number is qualification.json's or a run's summary.json's, as the files
-hold it (rbhyst.report.html's conventions).
+The verdict first, with the condition each part of it met or missed; the figure; then every
+criterion's demand, capacity and margin (per motion too); the required response spectrum and how
+each motion's test response spectrum met it; each run's accuracy; each run's peaks; the deck as
+run. Every number is qualification.json's or a run's summary.json's, as the files hold it
+(rbhyst.report.html's conventions).
 """
 
 from __future__ import annotations
@@ -30,14 +30,15 @@ def qualification_report(folder: Path, owned: set[str]) -> str:
     body.append("<h2>Warnings</h2>" + (items(warnings, "warnings") if warnings else '<p class="ok">No warnings.</p>'))
     if notes:
         body.append("<h3>Notes</h3>" + items(notes, "notes"))
-    body.append(_criteria(q))
-    body.append(_spectra(q))
-    body.append(_accuracy(q))
+    # the figure next to the verdict: the spectra in their bands and every margin at one glance
     figures = figure_names(folder, owned, ("qualification.png",))
     body.append('<section class="page"><h2>Figures</h2>'
                 + ("".join(figure(folder, n, _caption(n)) for n in figures) if figures else
                    '<p class="muted">The qualification wrote no figure (--no-plots or output.plots = false).</p>')
                 + "</section>")
+    body.append(_criteria(q))
+    body.append(_spectra(q))
+    body.append(_accuracy(q))
     for label, src, s in runs:
         label = "The deck's own motion" if label == "deck" else f"{label[:1].upper()}{label[1:]}"
         body.append(peaks_section(s, src, f"{label}: peaks and extremes ({src})"))
