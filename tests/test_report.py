@@ -265,6 +265,21 @@ def test_a_failed_verdict_says_which_condition_failed(qualification_folder, tmp_
     assert glance == "qualification.json:criteria.5.margin"
 
 
+def test_a_qualification_to_rrs_files_names_them(qualification_folder, tmp_path):
+    folder = tmp_path / "q"
+    shutil.copytree(qualification_folder, folder)
+    q = json.loads((folder / "qualification.json").read_text())
+    q["standard"] = None
+    for axis, r in q["rrs"].items():
+        r["name"], r["source"] = f"rrs ({axis})", "cabinet_rrs.csv"
+    (folder / "qualification.json").write_text(json.dumps(q, indent=2) + "\n")
+    code, err = invoke("report", folder)
+    assert code == 0, err
+    text = " ".join(check_page(folder).text)
+    assert "The deck qualifies to the required response spectra of cabinet_rrs.csv" in text
+    assert "AC156" not in text.replace("qualified to AC156", "")  # (the deck's title says it)
+
+
 def test_a_report_of_a_body_in_space_gives_its_points_vertical_accelerations(tmp_path):
     shutil.copytree(DECKS / "records", tmp_path / "records")
     d = tomllib.loads((DECKS / "cabinet_3d.toml").read_text())

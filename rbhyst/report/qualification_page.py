@@ -24,7 +24,8 @@ def qualification_report(folder: Path, owned: set[str]) -> str:
     q = load_json(folder / SRC)
     runs = [(r["motion"], r["summary"], load_json(folder / r["summary"])) for r in q.get("runs", [])
             if r["summary"] in owned and (folder / r["summary"]).is_file()]
-    standard = STANDARDS.get(q.get("standard"), "the required response spectrum given")
+    files = sorted({r.get("source") or "" for r in q.get("rrs", {}).values()} - {""})
+    standard = STANDARDS.get(q.get("standard")) or f"the required response spectra of {', '.join(files) or 'files'}"
     body = [_glance(q, standard), _verdict(q, standard)]
     warnings, notes = q.get("warnings", []), q.get("notes", [])
     body.append("<h2>Warnings</h2>" + (items(warnings, "warnings") if warnings else '<p class="ok">No warnings.</p>'))
