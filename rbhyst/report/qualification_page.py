@@ -56,6 +56,11 @@ def _caption(name: str) -> str:
     return name
 
 
+def _made(motion: dict) -> bool:
+    """A motion rbhyst made (its records in motions/), not the deck's own excitation.support."""
+    return "files" in motion
+
+
 def _least_margin(criteria: list[dict]) -> int | None:
     return min(range(len(criteria)), key=lambda i: criteria[i]["margin"]) if criteria else None
 
@@ -85,7 +90,7 @@ def _verdict(q: dict, standard: str) -> str:
     """The verdict and the four conditions it takes, each met or not."""
     criteria, trs, acc = q.get("criteria", []), q.get("trs", {}), q.get("accuracy", {})
     over = [c for c in criteria if not c["pass"]]
-    made = any("correlation_x1_x2" in m for m in q.get("motions", []))  # (motions rbhyst made)
+    made = any(_made(m) for m in q.get("motions", []))
     conditions = [
         (trs.get("pass"), "Every motion's test response spectrum lies within its band at every check frequency "
                           "and its peak acceleration is at least the least it may be"
@@ -142,14 +147,13 @@ def _spectra(q: dict) -> str:
             out.append(f'<p class="muted">The RRS has {len(freq)} points, {freq[0]:g} to {freq[-1]:g} Hz.</p>')
     rows = []
     for m, motion in enumerate(q.get("motions", [])):
-        made = "axes" in motion  # a motion rbhyst made; else the deck's own, its TRS alone
         for axis in q.get("rrs", {}):
-            if made:
+            if _made(motion):
                 p = f"{SRC}:motions.{m}.axes.{axis}"
                 facts = motion["axes"][axis]
                 t, tp = facts["trs"], f"{p}.trs"
                 where = motion["files"][axis]
-            else:
+            else:  # the deck's own: its TRS alone
                 p = tp = f"{SRC}:motions.{m}.trs.{axis}"
                 facts, t = {}, motion["trs"][axis]
                 where = motion.get("source", "the deck's excitation.support")
@@ -159,7 +163,7 @@ def _spectra(q: dict) -> str:
                          num(t.get("peak_g"), f"{tp}.peak_g"), num(t.get("peak_min_g"), f"{tp}.peak_min_g"),
                          '<td class="ok">yes</td>' if t.get("pass") else '<td class="bad">no</td>',
                          num(facts.get("strong_motion_s"), f"{p}.strong_motion_s")])
-    every = " (trs.csv holds every frequency)" if any("axes" in m for m in q.get("motions", [])) else ""
+    every = " (trs.csv holds every frequency)" if any(_made(m) for m in q.get("motions", [])) else ""
     out.append("<h3>The motions' test response spectra (TRS)</h3>"
                "<p>The TRS over the RRS at each 1/6-octave check frequency: its lowest and highest, and where; "
                f"each motion's peak acceleration against the least it may be{every}.</p>"
@@ -201,7 +205,7 @@ def _deck(q: dict) -> str:
     if deck is None:
         return ('<section class="page"><h2>The deck</h2><p class="muted">qualification.json holds no deck '
                 "(written by an older rbhyst).</p></section>")
-    made = [m for m in q.get("motions", []) if "files" in m]
+    made = [m for m in q.get("motions", []) if _made(m)]
     said = (f"<p>{esc(q.get('deck') or 'The deck')} as given, with the command's overrides. Each run replaced its "
             "excitation.support by the motion's records (units g), in this folder: "
             + esc("; ".join(f"motion {m.get('number')}: " + ", ".join(f"{a} = {f}" for a, f in m["files"].items())
