@@ -6,7 +6,8 @@ The Python API (see README, "Python API"): ``load_deck``, ``run``, and the ``Res
 
 from rbhyst._version import __version__
 
-__all__ = ["load_deck", "run", "modes", "InputError", "AnalysisError", "__version__"]
+__all__ = ["load_deck", "run", "modes", "InputError", "AnalysisError", "AccuracyWarning", "ModelWarning",
+           "__version__"]
 
 
 def __getattr__(name):
@@ -15,7 +16,7 @@ def __getattr__(name):
         from rbhyst import api
 
         return getattr(api, name)
-    if name in ("InputError", "AnalysisError"):
+    if name in ("InputError", "AnalysisError", "AccuracyWarning", "ModelWarning"):
         from rbhyst import errors
 
         return getattr(errors, name)

@@ -14,7 +14,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from rbhyst.errors import InputError
+from rbhyst.errors import InputError, issue
 from rbhyst.model.deck import Deck, load_deck
 from rbhyst.solve.result import Result
 
@@ -27,7 +27,9 @@ MODES_SECTIONS = ("body", "elements")
 def run(deck: Deck | str | Path, integrator: str | None = None, dt: float | None = None,
         out: str | Path | None = None, plots: bool | None = None, tolerance: float | None = None,
         estimate: bool | None = None, keep: bool = True, monitor=None) -> Result:
-    """Run a deck (a Deck or a path) and return its Result, with its error estimated.
+    """Run a deck (a Deck or a path) and return its Result, with its error estimated; each of
+    its warnings (``Result.warnings``) is also issued through Python's ``warnings``, as an
+    ``rbhyst.AccuracyWarning`` or an ``rbhyst.ModelWarning``.
 
     Without ``out`` the rows stay in memory (``Result.table``, ``to_pandas``). With ``out``
     they are streamed into ``out/time_history.csv`` beside summary.json and, if ``plots``
@@ -50,6 +52,7 @@ def run(deck: Deck | str | Path, integrator: str | None = None, dt: float | None
         result = analyse(system, settings, keep=keep, progress=progress)
         result.writer = write
         result.deck = as_run
+        issue(result.warnings)
         return result
     from rbhyst.files.outdir import staged_directory
     from rbhyst.results.writers import CsvWriter
@@ -74,6 +77,7 @@ def run(deck: Deck | str | Path, integrator: str | None = None, dt: float | None
             csv.wait()
     result.csv_path = Path(out) / "time_history.csv"
     result.writer = write
+    issue(result.warnings)
     return result
 
 

@@ -72,7 +72,10 @@ def run(
     report: Annotated[bool, typer.Option("--report", help="Also write report.html (see `rbhyst report`).")] = False,
 ):
     """Time-history analysis of the deck: time_history.csv, summary.json and PNG plots."""
+    import warnings
+
     from rbhyst import api
+    from rbhyst.errors import RbhystWarning
     from rbhyst.solve.kernels import compiled as kernels
     from rbhyst.model.deck import ANALYSIS_SECTIONS
 
@@ -89,8 +92,10 @@ def run(
                 from rbhyst.report.report_file import check_report_target
 
                 check_report_target(target)
-            result = api.run(d, integrator=integrator, dt=dt, out=target, plots=plots and d.output.plots,
-                             tolerance=tolerance, monitor=monitor)
+            with warnings.catch_warnings():  # (printed below as "warning: ..." lines: the API's are for Python)
+                warnings.simplefilter("ignore", RbhystWarning)
+                result = api.run(d, integrator=integrator, dt=dt, out=target, plots=plots and d.output.plots,
+                                 tolerance=tolerance, monitor=monitor)
             if report:
                 from rbhyst.report.report_file import write_report
 
@@ -150,8 +155,15 @@ def run_line(result) -> str:
                    for c in coords if not c.rotation)
     method = s.integrator + (f" (rtol {s.rtol:g})" if s.integrator == "adaptive" else "")
     motion = ", ".join(f"|{c.key('d')}| = {e.peak(c.column('d')):.4g} {c.d[1]}" for c in coords)
-    line = (f"{method}, dt = {s.dt:g} s, {result.steps} steps in {result.wall_s:.3g} s; peaks "
-            f"{motion}, {at}")
+    chosen = result.chosen
+    steps = f"{result.steps} steps"
+    if chosen is not None and s.integrator != "adaptive" and s.refine > 1:
+        step = f"dt = {s.dt:g} s, compute step {chosen['compute_step_s']:.3g} s (chosen for the accuracy)"
+        steps = f"{result.stats.steps_taken} compute steps"
+    else:
+        step = f"dt = {s.dt:g} s"
+    kin = ", exact kinematics" if result.system.kinematics == "exact" else ""
+    line = f"{method}{kin}, {step}, {steps} in {result.wall_s:.3g} s; peaks {motion}, {at}"
     acc = result.accuracy
     if acc and acc.get("estimated_error"):
         name, worst = max(acc["estimated_error"].items(), key=lambda kv: kv[1])

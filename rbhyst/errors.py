@@ -42,3 +42,45 @@ def byte_size(n: float) -> str:
         if n >= scale:
             return f"{n / scale:.3g} {unit}"
     return f"{int(n)} bytes"
+
+
+class RbhystWarning(UserWarning):
+    """What a finished analysis says of itself that a user must read (``Result.warnings``):
+    ``rbhyst.run`` issues each through Python's ``warnings``, so that a notebook shows it and
+    ``warnings.simplefilter("error", rbhyst.AccuracyWarning)`` makes it fatal. The command line
+    prints the same lines as ``warning: ...`` instead."""
+
+
+class AccuracyWarning(RbhystWarning):
+    """The answer may be further from the truth than analysis.warn_error: its estimated error,
+    a history no step determines, the energy balance, the small rotations' error."""
+
+
+class ModelWarning(RbhystWarning):
+    """The scene is likely not what was meant, or leaves what its model describes: no excitation
+    within the run, an element beyond its stroke, a magnitude that betrays a unit mistake."""
+
+
+class Warned(str):
+    """A warning's text with its category (AccuracyWarning or ModelWarning): a str everywhere
+    else (summary.json, the console)."""
+
+    category: type = ModelWarning
+
+    def __new__(cls, text: str, category: type = ModelWarning):
+        out = super().__new__(cls, text)
+        out.category = category
+        return out
+
+
+def accuracy_warnings(texts) -> list[Warned]:
+    """Texts as AccuracyWarning's."""
+    return [Warned(t, AccuracyWarning) for t in texts]
+
+
+def issue(texts, stacklevel: int = 3) -> None:
+    """Each text through Python's ``warnings``, in its category (ModelWarning for a plain str)."""
+    import warnings
+
+    for text in texts:
+        warnings.warn(str(text), getattr(text, "category", ModelWarning), stacklevel=stacklevel)

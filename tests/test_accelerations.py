@@ -60,8 +60,9 @@ def test_every_row_is_the_equation_of_motion(tmp_path, integrator):
     """M at = p(t) - R - C v at every row, for support motion (p = 0: the mounts and dampers
     alone) and for forces, and a = at - ag."""
     for force in (False, True):
-        res = rbhyst.run(write_deck(tmp_path, pulse_deck(force=force, damper=True)), integrator=integrator,
-                         estimate=False)
+        deck = pulse_deck(force=force, damper=True)
+        deck["analysis"]["kinematics"] = "small"  # (the seed's equation of motion, eq. 11)
+        res = rbhyst.run(write_deck(tmp_path, deck), integrator=integrator, estimate=False)
         system = res.system
         p = system.excitation.forces(res.time)
         r = res.table[:, res.layout.slices["R"]]
@@ -163,16 +164,23 @@ def names_in_warnings(res) -> str:
 
 def assert_true_or_warned(res, truth_rows, label=""):
     """Every total acceleration, resultant and element force within 2 % of the reference, or a
-    warning that names it; the estimate never below half the truth where it is above 2 %."""
+    warning that names it; the estimate never below half the truth where it is above 2 %. A
+    column the scene leaves nearly at rest (below a tenth of its family's scale) is judged in its
+    family's terms, as the warnings judge it (estimate.ranked): its estimate still holds it."""
+    from rbhyst.solve.estimate import family_terms
+
     cols = [c for c in estimate_columns(res.layout) if not c[0].startswith(("u", "theta"))]
     keys, index, fams = [k for k, _, _ in cols], [c for _, c, _ in cols], [f for _, _, f in cols]
     errors = column_errors(res.table[:, index], truth_rows[:, index], keys, fams, res.system)
+    family, quiet = family_terms(dict(zip(keys, errors)), res)
     warned = names_in_warnings(res)
     sensitive = res.accuracy is not None and res.accuracy["status"] == "sensitive"
     for key, err in zip(keys, errors):
         if err > 0.02 and not sensitive:
-            assert re.search(rf"(in|also|,) {key}\b", warned), (label, key, err, res.warnings)
             assert res.accuracy["estimated_error"][key] >= 0.5 * err, (label, key, err)
+            if key in quiet and family[key] <= 0.02:
+                continue
+            assert re.search(rf"(in|also|,) {key}\b", warned), (label, key, err, res.warnings)
 
 
 @pytest.mark.parametrize("name", sorted(p.name for p in CASES.glob("*.toml")) if CASES.is_dir() else ["(absent)"])

@@ -12,14 +12,21 @@ from conftest import invoke, seed_deck, square_linear_deck, write_deck
 G = 9.80665
 
 
-def test_gravity_in_mm_s2_warns_with_its_numbers(tmp_path):
-    """A mm/s2 slip once ran silently to a static u2 of -490 m on a 1 m body."""
+def test_gravity_in_mm_s2_is_a_mistake_with_its_numbers(tmp_path):
+    """A mm/s2 slip once ran silently to a static u2 of -490 m on a 1 m body; then it warned and
+    ran to a 12 m sag. It is the deck's mistake (exit 2) unless the deck says it means it
+    (body.gravity_check = false), and then its static deflection is still warned."""
     data = square_linear_deck()
     data["body"]["gravity"] = [0.0, -G * 1000.0]
     data["excitation"] = {"support": {"x1": {"type": "sine", "amplitude": 0.1, "frequency_hz": 2.0, "units": "g"}}}
+    with pytest.raises(rbhyst.InputError) as err:
+        rbhyst.run(write_deck(tmp_path, data), estimate=False)
+    [line] = err.value.problems
+    assert line.startswith("body.gravity: |g| = 9806.65 m/s2 is 1000 times the standard 9.80665 m/s2")
+    assert "was it given in mm/s2?" in line
+    data["body"]["gravity_check"] = False
     res = rbhyst.run(write_deck(tmp_path, data), estimate=False)
     said = " ".join(res.warnings)
-    assert "|g| = 9806.65 m/s2 is 1000 times the standard 9.80665 m/s2" in said
     assert "static deflection under the weight is 12.26 m" in said  # m g / 2k = 500 * 9806.65 / 4e5
     assert any(n.startswith("body.gravity: the weight 4.90332e+06 N rests on the elements") for n in res.notes)
 

@@ -137,6 +137,19 @@ class Part(_Model):
         return self
 
 
+#: the standard acceleration of gravity (m/s2) and how far a deck's may differ from it (the Earth's
+#: ranges over 9.78-9.83 m/s2; 5 % allows a rounded 9.5 or 10): beyond, body.gravity_check = false
+STANDARD_GRAVITY = 9.80665
+GRAVITY_SPREAD = 0.05
+
+
+def _gravity_units(g: float) -> str:
+    """The units a gravity of magnitude g (read as m/s2) was most likely given in."""
+    ratios = {"mm/s2": 1e-3, "cm/s2": 1e-2, "g (1 for 9.81 m/s2)": STANDARD_GRAVITY, "ft/s2": 0.3048,
+              "in/s2": 0.0254}
+    return min(ratios, key=lambda u: abs(np.log(g * ratios[u] / STANDARD_GRAVITY)))
+
+
 class Body(_Model):
     """Exactly one of three forms: ``vertices`` + ``mass`` (one uniform polygon), ``parts``
     (several uniform polygons, which may overlap), or ``mass`` + ``mass_centre`` + ``inertia``
@@ -153,6 +166,9 @@ class Body(_Model):
     #: the acceleration of gravity in the deck's frame (m/s2): the weight m g acts at G and the
     #: run starts from the static equilibrium under it (see README, "Gravity preload")
     gravity: Point | None = None
+    #: false: a gravity of any magnitude (another planet, a centrifuge); true: |gravity| within
+    #: GRAVITY_SPREAD of the standard 9.80665 m/s2 (or zero), else a mistake of units
+    gravity_check: bool = True
 
     @field_validator("inertia", mode="before")
     @classmethod
@@ -189,6 +205,11 @@ class Body(_Model):
                 problems += [(k, f"required with body.{other}: a body given by its properties needs mass, "
                                  "mass_centre, inertia (about the mass centre) and vertices (its outline)")
                              for k, other in (direct, direct[::-1]) if k not in given]
+        g = float(np.linalg.norm(self.gravity)) if self.gravity is not None else 0.0
+        if self.gravity_check and g > 0 and abs(g / STANDARD_GRAVITY - 1.0) > GRAVITY_SPREAD:
+            problems.append(("gravity", f"|g| = {g:.6g} m/s2 is {g / STANDARD_GRAVITY:.4g} times the standard "
+                                        f"{STANDARD_GRAVITY} m/s2: rbhyst takes it in m/s2 (was it given in "
+                                        f"{_gravity_units(g)}?); body.gravity_check = false allows any magnitude"))
         if problems:
             raise _key_problems(problems)
         return self
@@ -535,7 +556,9 @@ class Excitation(_Model):
 class Analysis(_Model):
     dt: PosFloat
     duration: PosFloat | None = None
-    integrator: str = "chang"
+    #: the method, named: exactly it at dt; left out, rbhyst chooses the method and the compute
+    #: step that meet warn_error, with dt the output interval (see README, "Accuracy by default")
+    integrator: str | None = None
     #: accuracy limit on the stiffest instantaneous mode: omega_max * h (see README)
     max_omega_dt: PosFloat = 0.5
     #: at most 2**max_substep_level substeps per step before the run stops
@@ -548,13 +571,14 @@ class Analysis(_Model):
     warn_error: Annotated[float, Field(gt=0, lt=1)] = 0.01
     #: estimate every run's error (false skips it: a sweep that has checked its dt once)
     estimate_error: bool = True
-    #: the body's kinematics: the seed's small rotations (eqs. 7-8) or exact rotations of any size
-    kinematics: Literal["small", "exact"] = "small"
+    #: the body's kinematics: the seed's small rotations (eqs. 7-8), exact rotations of any size,
+    #: or "auto": small where the terms they neglect stay below a tenth of warn_error, else exact
+    kinematics: Literal["auto", "small", "exact"] = "auto"
 
     @field_validator("integrator")
     @classmethod
-    def _known(cls, v: str) -> str:
-        if v not in INTEGRATORS:
+    def _known(cls, v: str | None) -> str | None:
+        if v is not None and v not in INTEGRATORS:
             raise ValueError(f"unknown integrator {v!r}; choose one of {', '.join(INTEGRATORS)}")
         return v
 

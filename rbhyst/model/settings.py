@@ -8,9 +8,13 @@ from rbhyst.errors import InputError
 from rbhyst.model.integrators import INTEGRATORS
 
 
+#: the method a run steps with where the deck names none (and the first pass of the choice)
+DEFAULT_INTEGRATOR = "chang"
+
+
 @dataclass(frozen=True)
 class Settings:
-    integrator: str = "chang"
+    integrator: str = DEFAULT_INTEGRATOR
     dt: float = 1e-3
     duration: float | None = None
     every: int = 1
@@ -31,6 +35,15 @@ class Settings:
     points: tuple[tuple[str, tuple[float, ...]], ...] = ()
     #: output.spectra: (dampings, periods in s) or None for no spectra
     spectra: tuple[tuple[float, ...], tuple[float, ...]] | None = None
+    #: every step of dt is split into this many times the compute steps the excitation needs:
+    #: the refinement rbhyst.solve.choose makes to meet warn_error (rows stay on dt)
+    refine: int = 1
+    #: rbhyst chooses the compute step (and, past a budget, the method) that meets warn_error,
+    #: dt being the output interval (rbhyst.solve.choose); False: exactly ``integrator`` at ``dt``
+    choose: bool = False
+    #: "small", "exact" (the system is assembled so) or "auto": small rotations where the terms
+    #: they neglect stay below a tenth of warn_error, else the exact twin (rbhyst.solve.kinematic)
+    kinematics: str = "small"
 
 
 def settings_from_deck(deck, integrator: str | None = None, dt: float | None = None,
@@ -46,8 +59,11 @@ def settings_from_deck(deck, integrator: str | None = None, dt: float | None = N
         raise InputError(f"--dt: {dt} must be > 0")
     if tolerance is not None and not 0 < tolerance < 1:
         raise InputError(f"--tolerance: {tolerance} must be between 0 and 1 (a relative error)")
+    named = integrator or a.integrator
     return Settings(
-        integrator=integrator or a.integrator,
+        integrator=named or DEFAULT_INTEGRATOR,
+        choose=named is None,
+        kinematics=a.kinematics,
         dt=dt or a.dt,
         duration=a.duration,
         every=deck.output.every,

@@ -378,6 +378,8 @@ class System:
     elements: tuple[Element, ...]
     excitation: Excitation
     notes: tuple[str, ...] = field(default=())
+    #: what the deck's magnitudes say of its units (rbhyst.model.plausible): a run's first warnings
+    warnings: tuple[str, ...] = field(default=())
     dampers: tuple[Damper, ...] = field(default=())
     #: the weight m (g1, g2, 0) acting at G when the deck gives body.gravity
     weight: np.ndarray | None = None
@@ -786,8 +788,15 @@ def _system(deck: dk.Deck, body, mass, rows, names, mult, elements, excitation, 
     if deck.damping is not None and deck.damping.rayleigh is not None:
         k0 = (bvec.T * (np.array(mult, dtype=float) * np.array([k_el[n] for n in names]))) @ bvec
         rayleigh = rayleigh_damping(deck.damping.rayleigh, mass, k0)
+    from rbhyst.model import plausible
+
+    cautions = plausible.excitation_warnings(excitation, plausible.signal_units(deck), float(mass[0]),
+                                             float(np.max(mass[len(mass) // 2:])) if len(mass) > 3 else float(mass[2]),
+                                             body.extent)
+    cautions += plausible.density_warning(body.mass, plausible.body_measure(body), getattr(body, "dimensions", 2))
     return System(
         title=deck.title or "",
+        warnings=tuple(cautions),
         body=body,
         mass=mass,
         bvec=bvec,

@@ -7,6 +7,7 @@ from __future__ import annotations
 import dataclasses
 from pathlib import Path
 
+from rbhyst.errors import accuracy_warnings
 from rbhyst.model.deck import ANALYSIS_SECTIONS, Deck, load_deck
 from rbhyst.model.settings import Settings, settings_from_deck
 from rbhyst.model.system import System, assemble
@@ -38,36 +39,47 @@ def plan(system: System, settings: Settings):
 
 def analyse(system: System, settings: Settings, keep: bool = True, csv=None, planned=None,
             progress=None, spare_core: bool | None = None) -> Result:
-    """One run and its estimate, or (with a tolerance) the run that meets it; then its notes
-    and warnings. ``csv``: where the rows are streamed (rbhyst.solve.plan.Rows; a
+    """One run and its estimate, or (with a tolerance) the run that meets it, or (a deck that
+    names no integrator) the run rbhyst chose to meet warn_error (rbhyst.solve.choose); with
+    analysis.kinematics = "auto", in the kinematics that scene needs; then its notes and
+    warnings. ``csv``: where the rows are streamed (rbhyst.solve.plan.Rows; a
     rbhyst.results.writers.CsvWriter). ``spare_core``: whether the estimate may take a second
     core (rbhyst.solve.estimate; None: where this process may run on more than one; a sweep's
     worker says False)."""
     from rbhyst.results.checks import diagnose
-    from rbhyst.solve.estimate import estimate, meet_tolerance, warnings_for
+    from rbhyst.solve.choose import answer_at, chosen_run, estimated_run
+    from rbhyst.solve.estimate import meet_tolerance, warnings_for
+    from rbhyst.solve.kinematic import kinematics_summary, kinematics_warning, needs_exact
 
+    if spare_core is None:
+        from rbhyst.cores import usable_cores
+
+        spare_core = usable_cores() > 1
+    auto = settings.kinematics == "auto" and any(c.rotation for c in system.coordinates)
     if settings.tolerance is not None:
         if progress is not None:
             progress(0, 0, f"meeting the tolerance {settings.tolerance:g}")
         result = meet_tolerance(system, settings, keep=keep, csv=csv)
-    else:
-        planned = planned or plan(system, settings)
-        if keep:
-            planned.check_size(keep=True)
-        companion = _companion(planned) if settings.estimate else None
-        result = planned.run(keep=keep, csv=csv, progress=progress, tap=companion and companion[1])
-        if settings.estimate:
-            if csv is not None:
-                # the rows written first (their threads format them while the loop steps): an
-                # estimate beside them took 30-60 % longer, and the two together no less time
-                csv.wait()
-            if progress is not None:
-                progress(0, 0, "estimating the error")
-            if spare_core is None:
-                from rbhyst.cores import usable_cores
+        if auto and needs_exact(result, settings)[0]:
+            from rbhyst.model.kinematics import exact_twin
 
-                spare_core = usable_cores() > 1
-            result.accuracy = estimate(result, settings, companion=companion, spare_core=spare_core)
+            twin = exact_twin(result.system)
+            if twin is not None:
+                small = result
+                result = meet_tolerance(twin, settings, keep=keep, csv=csv)
+                result.kinematics = kinematics_summary(small, settings, exact=result)
+                result.kinematics.update(model="exact", method="chosen by analysis.kinematics = \"auto\": the "
+                                         "terms the small rotations neglect reach a tenth of warn_error")
+    elif settings.choose and settings.estimate:
+        result = chosen_run(system, settings, keep=keep, csv=csv, progress=progress, spare_core=spare_core)
+    else:
+        # with kinematics to choose, the small-rotation run is a trial: its rows are written once
+        # the choice is made (run again: the same numbers; or the exact twin's)
+        result = estimated_run(system, settings, keep=keep, csv=None if auto else csv, planned=planned,
+                               progress=progress, spare_core=spare_core)
+        if auto:
+            result = answer_at(result, result.settings, needs_exact(result, settings)[0], keep, csv, rerun=True,
+                               progress=progress)
     result.notes, result.warnings = diagnose(result)
     if result.spectra is not None:
         from rbhyst.solve.located import unfinished_note
@@ -77,11 +89,10 @@ def analyse(system: System, settings: Settings, keep: bool = True, csv=None, pla
         end = max(ends) if ends and None not in ends else None  # (a sine without end never ends)
         note = unfinished_note(end, result.steps * result.settings.dt, periods, dampings)
         result.notes += [note] if note else []
-    result.warnings += warnings_for(result.accuracy, result.settings, result.stats)
-    from rbhyst.solve.kinematic import kinematics_summary, kinematics_warning
-
-    result.kinematics = kinematics_summary(result, result.settings)
-    result.warnings += kinematics_warning(result.kinematics, result.settings.warn_error)
+    result.warnings += accuracy_warnings(warnings_for(result.accuracy, result.settings, result.stats, result))
+    if result.kinematics is None:
+        result.kinematics = kinematics_summary(result, result.settings)
+    result.warnings += accuracy_warnings(kinematics_warning(result.kinematics, result.settings.warn_error, result))
     return result
 
 
@@ -89,14 +100,3 @@ def run_deck(deck, keep: bool = True, spare_core: bool | None = None, **options)
     """A deck's analysis in memory (``options``: integrator, dt, tolerance, estimate)."""
     system, settings = scene(deck_of(deck), **options)
     return analyse(system, settings, keep=keep, spare_core=spare_core)
-
-
-
-def _companion(planned):
-    """(plan, tap) where the run's error can come from its companion (rbhyst.solve.companion)."""
-    from rbhyst.solve import companion
-    from rbhyst.solve.plan import FixedStepPlan
-
-    if not isinstance(planned, FixedStepPlan) or companion.unfit(planned) is not None:
-        return None
-    return planned, companion.RunTap(planned)

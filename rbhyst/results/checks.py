@@ -6,12 +6,13 @@ import math
 
 import numpy as np
 
+from rbhyst.errors import ModelWarning, Warned, accuracy_warnings
 from rbhyst.solve.result import ENERGY_WARN, Result
 
 def diagnose(result: Result) -> tuple[list[str], list[str]]:
     """Notes and warnings of a run, in the words the command line prints."""
     notes = list(result.system.notes)
-    warnings: list[str] = []
+    warnings: list[str] = list(result.system.warnings)  # (the deck's magnitudes: rbhyst.model.plausible)
     s, st = result.settings, result.stats
     ex = result.system.excitation
     t_end = st.steps * s.dt
@@ -27,27 +28,26 @@ def diagnose(result: Result) -> tuple[list[str], list[str]]:
         notes.append(f"{st.substeps} substeps (up to 2^{st.max_substep_level} per step) resolved stiff instants; "
                      "see summary.json")
     if result.energy_balance > ENERGY_WARN:
-        warnings.append(f"energy balance error {result.energy_balance:.2%} exceeds {ENERGY_WARN:.0%}: reduce dt")
+        warnings += accuracy_warnings([f"energy balance error {result.energy_balance:.2%} exceeds "
+                                       f"{ENERGY_WARN:.0%}: reduce dt"])
     # rotations beyond the seed's small ones: rbhyst.solve.kinematic says by how much, in numbers
     warnings += stroke_warnings(result)
+    warnings += response_warnings(result)
     if result.system.static is not None:
         more_notes, more_warnings = gravity_checks(result)
         notes += more_notes
         warnings += more_warnings
-    return notes, warnings
+    return notes, [w if isinstance(w, Warned) else Warned(w, ModelWarning) for w in warnings]
 
 
-#: the standard acceleration of gravity (m/s2) and how far a deck's may differ from it unremarked
-STANDARD_GRAVITY = 9.80665
-GRAVITY_SPREAD = 0.05
 #: a static rotation under the weight alone beyond this (rad) says the deck is likely wrong
 STATIC_ROTATION_WARN = 0.05
 
 
 def gravity_checks(result: Result) -> tuple[list[str], list[str]]:
-    """The static preload (a note), and warnings where gravity or its deflection is implausible: a
-    g far from the standard one (mm/s2 for m/s2?), a static deflection beyond the body's size or
-    the seed's small rotations, an element beyond its stroke before anything moves."""
+    """The static preload (a note), and warnings where its deflection is implausible: beyond the
+    body's size or the seed's small rotations, an element beyond its stroke before anything moves
+    (a g far from the standard one is the deck's mistake: rbhyst.model.deck.Body, gravity_check)."""
     system = result.system
     st = system.static
     w = system.weight
@@ -55,16 +55,11 @@ def gravity_checks(result: Result) -> tuple[list[str], list[str]]:
     moving = [j for j, c in enumerate(coords) if not c.rotation]
     spin = [j for j, c in enumerate(coords) if c.rotation]
     q = system.to_deck(st.q) if hasattr(system, "to_deck") else st.q
-    g = np.asarray(w[moving], dtype=float) / system.body.mass
-    gmag = float(np.linalg.norm(g))
     size = system.body.extent
     at = ", ".join(f"{c.key('d')} = {x:.4g} {c.d[1]}" for c, x in zip(coords, q))
     notes = [f"body.gravity: the weight {float(np.linalg.norm(w[moving])):.6g} N rests on the elements at {at} "
              "(the static preload; time_history.csv is measured from there)"]
     warnings = []
-    if gmag > 0 and abs(gmag / STANDARD_GRAVITY - 1.0) > GRAVITY_SPREAD:
-        warnings.append(f"body.gravity: |g| = {gmag:.6g} m/s2 is {gmag / STANDARD_GRAVITY:.4g} times the standard "
-                        f"{STANDARD_GRAVITY} m/s2 (rbhyst takes it in m/s2: was it given in mm/s2 or cm/s2?)")
     shift = float(np.linalg.norm(q[moving]))
     turn = float(np.linalg.norm(q[spin])) if spin else 0.0
     if shift > size or turn > STATIC_ROTATION_WARN:
@@ -90,10 +85,14 @@ ROWS_PER_FEATURE = 10
 
 def unresolved_signals(result: Result) -> list[str]:
     """Analytic signals too fast for the output's dt: the integration follows them (substeps), the
-    spectra see every compute step, but the rows, and the peaks taken over them, sample at dt."""
+    peaks and spectra see every compute step, but the rows sample at dt."""
+    import dataclasses
+
     from rbhyst.model.signals import Pulse
 
     s = result.settings
+    if result.chosen is not None:  # the rows are the output interval's, not the compute step's
+        s = dataclasses.replace(s, dt=result.chosen["dt_s"])
     t_end = result.stats.steps * s.dt
     fast: dict[tuple[str, float], list[str]] = {}
     for key, signal in result.system.excitation.signals.items():
@@ -104,8 +103,8 @@ def unresolved_signals(result: Result) -> list[str]:
         if feature / s.dt < ROWS_PER_FEATURE:
             fast.setdefault((what, feature), []).append(SIGNAL_KEYS[key])
     return [f"{', '.join(keys)}: {what} spans {feature / s.dt:.2g} rows of dt = {s.dt:g} s: the integration "
-            f"follows it and the spectra see every compute step, but time_history.csv and the peaks show the "
-            f"response at dt only, missing what happens between rows; dt = {feature / ROWS_PER_FEATURE:.3g} s "
+            f"follows it and the peaks, extremes and spectra see every compute step, but the rows of "
+            f"time_history.csv and the plots show the response at dt only; dt = {feature / ROWS_PER_FEATURE:.3g} s "
             f"({ROWS_PER_FEATURE} rows) would show it" for (what, feature), keys in fast.items()]
 
 
@@ -138,3 +137,15 @@ def stroke_warnings(result: Result) -> list[str]:
                            f"({use['utilization']:.0%} of it)")
         k += el.count
     return out
+
+
+def response_warnings(result: Result) -> list[str]:
+    """A response no mounted body survives (rbhyst.model.plausible.response_warnings): G's
+    displacement against the body's size and the elements' strokes, its largest rotation."""
+    from rbhyst.model.plausible import response_warnings as judged
+
+    system, e = result.system, result.extremes
+    moving = {c.key("d"): e.peak(c.column("d")) for c in system.coordinates if not c.rotation}
+    turns = [e.peak(c.column("d")) for c in system.coordinates if c.rotation]
+    strokes = [max(abs(x) for x in el.stroke) for el in system.elements if el.stroke is not None]
+    return judged(moving, system.body.extent, strokes, max(turns, default=0.0))

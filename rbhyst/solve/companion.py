@@ -48,8 +48,8 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from rbhyst.solve.kernels.layout import (ESTIMATE_DONE, ESTIMATE_FAILED, ESTIMATE_PROBED, LOCATED, MODIFIED, SMALL,
-                                         x_slice)
+from rbhyst.solve.kernels.layout import (ESTIMATE_DONE, ESTIMATE_FAILED, ESTIMATE_PROBED, ESTIMATE_TOO_LARGE, LOCATED,
+                                         MODIFIED, SMALL, x_slice)
 
 #: the methods whose modified equation is written out here
 METHODS = tuple(MODIFIED)
@@ -315,8 +315,8 @@ def estimate_in_one_call(plan, tap: RunTap, compare_every: int, layout, scales: 
     Companion.run's differences) and, where it lies between ``check`` and ``largest`` of
     ``scales`` (estimate.scaled_errors), the probe's at ``eps`` (Companion.probe's), in one
     compiled call (kernels.estimate): (changed, moved, seconds); changed None where the
-    adaptive solutions must say it or the estimate is past ``largest``, moved None where the
-    probe was not needed."""
+    adaptive solutions must say it, moved None where the probe was not needed (or the estimate
+    is past ``largest``: then not computed)."""
     from rbhyst.solve.kernels.compiled import kernel
     from rbhyst.solve.kernels.layout import INFO_SIZE, N_E, N_STATE, N_W
     from rbhyst.solve.plan import raise_on_failure
@@ -326,7 +326,7 @@ def estimate_in_one_call(plan, tap: RunTap, compare_every: int, layout, scales: 
     assert tap.next == len(tap.t), "the run's tap missed compute steps"
     nodes, n = len(tap.t), system.n
     ne = plan.bvec.shape[0]
-    count = plan.n_steps // compare_every + 1  # (the compared nodes: plan.compared_nodes', in the call)
+    count = plan.compute_steps // compare_every + 1  # (the compared nodes: plan.compared_nodes', in the call)
     segments, coefs, _ = plan._through
     breaks = signal_corners(system)
     x0, st0 = plan.initial_state()
@@ -356,7 +356,7 @@ def estimate_in_one_call(plan, tap: RunTap, compare_every: int, layout, scales: 
     if code == ESTIMATE_FAILED:
         raise_on_failure(system, s, info)
         raise AssertionError("the companion's loop took fewer steps than asked, or the compared nodes are not the run's")
-    if code not in (ESTIMATE_DONE, ESTIMATE_PROBED):
+    if code not in (ESTIMATE_DONE, ESTIMATE_PROBED, ESTIMATE_TOO_LARGE):
         return None, None, wall
     expand = layout.expand_change
     return expand(top_c), (expand(top_p) if code == ESTIMATE_PROBED else None), wall

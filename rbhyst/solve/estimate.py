@@ -136,12 +136,7 @@ def error_scales(peak: np.ndarray, keys, families, system: System) -> np.ndarray
     """What column_errors divides each column's largest difference by, from the reference's
     peaks: the peak, or the family's scale where the column is at rest, NEGLIGIBLE x the scale
     where it is below that."""
-    length = _to_length(keys, system)
-    index: dict = {}
-    family = np.array([index.setdefault(f, len(index)) for f in families], dtype=np.intp)
-    top = np.zeros(len(index))
-    np.maximum.at(top, family, peak * length)  # each family's largest peak, in its measure
-    scale = top[family] / length
+    scale = family_scales(peak, keys, families, system)
     return np.where(peak > AT_REST * scale, np.maximum(peak, NEGLIGIBLE * scale), scale)
 
 
@@ -234,16 +229,19 @@ class Estimator:
         return [f for _, _, f in self.columns]
 
 
-def estimate(result, settings, companion=None, spare_core: bool = False) -> dict:
+def estimate(result, settings, companion=None, spare_core: bool = False, screen: bool = False) -> dict:
     """summary.json's ``accuracy`` for a finished run (see the module docstring). ``companion``:
     (the run's plan, the RunTap that saw its chunks), where rbhyst.solve.companion applies;
     ``spare_core``: a core is free for the companion's check while the companion runs (not in
-    a sweep's worker, whose siblings take every core)."""
+    a sweep's worker, whose siblings take every core). ``screen``: a pass that is run again at a
+    finer step where it exceeds warn_error (rbhyst.solve.choose): above warn_error the estimate
+    stops at the companion's number (status "screened": no check of how determined the history
+    is, no adaptive solution where the companion's is large), which predicts the step."""
     system = result.system
     t, values = result.compared[:, 0], result.compared[:, 1:]
     tic = time.perf_counter()
     if companion is not None:
-        out = _from_companion(result, settings, *companion, spare_core=spare_core)
+        out = _from_companion(result, settings, *companion, spare_core=spare_core, screen=screen)
         if out is not None:
             _settle_status(out, settings)
             out.update(tolerance=settings.tolerance, compared_steps=int(len(t)),
@@ -265,7 +263,10 @@ def estimate(result, settings, companion=None, spare_core: bool = False) -> dict
             out = est.assess(values)
             out["method"] = (f"against the event-located adaptive solution (DOP853, every reversal an event) at "
                              f"rtol {REFERENCE_RTOL:g}")
-            if max(out["estimated_error"].values()) > CHECK_ABOVE * settings.warn_error:
+            worst = max(out["estimated_error"].values())
+            if screen and worst > settings.warn_error:
+                out["status"] = "screened"  # (to be run again at a finer step: its check would be wasted)
+            elif worst > CHECK_ABOVE * settings.warn_error:
                 # an error near or above the warning: is it the step's (a smaller dt would do) or is
                 # the history itself undetermined? The solution 100 times looser says
                 est.add_check(out, values, rtol, rtol * CHECK_FACTOR)
@@ -307,7 +308,7 @@ COMPANION_OMEGA_DT = 1.0
 BESIDE_MIN_WORK = 100_000
 
 
-def _from_companion(result, settings, plan, tap, spare_core: bool = False) -> dict | None:
+def _from_companion(result, settings, plan, tap, spare_core: bool = False, screen: bool = False) -> dict | None:
     """The estimate from the run's companion (rbhyst.solve.companion), or None where the adaptive
     solutions must say it: a step whose Newton iterations failed in the companion where the
     run's converged, an element out of its range, an estimate past COMPANION_LARGEST, a history
@@ -332,6 +333,7 @@ def _from_companion(result, settings, plan, tap, spare_core: bool = False) -> di
     peaks = np.maximum(np.abs(extremes.max[columns]), np.abs(extremes.min[columns]))
     scales = error_scales(peaks, keys, families, result.system)
     check = CHECK_ABOVE * settings.warn_error
+    largest = settings.warn_error if screen else COMPANION_LARGEST  # (a screen's pass past it is run again)
     beside = spare_core and stats.steps_taken * plan.bvec.shape[0] >= BESIDE_MIN_WORK
     if beside:
         companion = Companion(plan, tap, result.compare_every)
@@ -352,12 +354,17 @@ def _from_companion(result, settings, plan, tap, spare_core: bool = False) -> di
     else:
         # the companion, and the probe where its estimate asks for it, in one compiled call
         changed, moved, wall = estimate_in_one_call(plan, tap, result.compare_every, result.layout, scales, check,
-                                                    COMPANION_LARGEST, COMPANION_PROBE)
+                                                    largest, COMPANION_PROBE)
         checked = (moved, 0.0) if moved is not None else None
     if changed is None:
         return None
     err = scaled_errors(changed, scales)
     info = {"steps": int(stats.steps_taken), "wall_s": wall}
+    method = (f"against the run's companion: {settings.integrator} with its leading local error taken out of the "
+              "load (the method's modified equation) and every element's reversal located within its step")
+    if screen and max(err, default=0.0) > largest:
+        return {"estimated_error": dict(zip(keys, map(float, err))), "companion": info, "status": "screened",
+                "method": method + " (a pass to be run again at a finer step: not checked further)"}
     if max(err, default=0.0) > COMPANION_LARGEST:
         return None
     if max(err, default=0.0) > check:
@@ -371,10 +378,7 @@ def _from_companion(result, settings, plan, tap, spare_core: bool = False) -> di
         info.update(wall_s=wall + took, probe=COMPANION_PROBE, spread=float(max(spread, default=0.0)))
         if info["spread"] > settings.warn_error:
             return None
-    return {"estimated_error": dict(zip(keys, map(float, err))), "companion": info,
-            "method": f"against the run's companion: {settings.integrator} with its leading local error taken out "
-                      "of the load (the method's modified equation) and every element's reversal located within "
-                      "its step"}
+    return {"estimated_error": dict(zip(keys, map(float, err))), "companion": info, "method": method}
 
 
 def _settle_status(out: dict, settings) -> None:
@@ -397,10 +401,10 @@ def _add_spectra_errors(out: dict, result, est: Estimator, rtol: float) -> None:
     if result.spectra is None:
         return
     from rbhyst.solve.located import SpectraSink
-    from rbhyst.solve.plan import compute_times
+    from rbhyst.solve.plan import compute_times, splitting
 
     s = result.settings
-    bounds, substeps = result.system.excitation.substeps(s.dt, result.stats.steps)
+    bounds, substeps = splitting(result.system, s, result.stats.steps)
     times = np.concatenate([[0.0], compute_times(bounds, substeps, s.dt)])
     if len(times) > SPECTRA_ROWS:
         out["spectra"] = f"not estimated: {len(times)} compute steps (more than {SPECTRA_ROWS})"
@@ -438,28 +442,83 @@ def _halving(result, settings) -> dict:
     from rbhyst.solve.plan import prepare
 
     order = integrators.get(settings.integrator).order
-    half = prepare(result.system, dataclasses.replace(settings, dt=settings.dt / 2, every=1)).run(
-        keep=False, compare_every=2 * result.compare_every)
-    n = min(len(result.compared), len(half.compared))
+    planned = prepare(result.system, dataclasses.replace(settings, dt=settings.dt / 2, every=1))
+    # the same compute nodes as the run's compared ones, every second of the finer run's (where
+    # the run followed a record finer than dt, the finer run may take as many: matched by time)
+    mine = result.compared[:, 0]
+    doubled = planned.compute_steps == 2 * result.stats.steps * result.stats.record_substeps * result.stats.refine
+    half = planned.run(keep=False, compare_every=2 * result.compare_every if doubled else None)
+    theirs = half.compared[:, 0]
+    at = np.clip(np.searchsorted(theirs, mine), 0, len(theirs) - 1)
+    same = np.abs(theirs[at] - mine) <= 1e-9 * max(float(mine[-1]), 1.0)
     cols = estimate_columns(result.layout)
     keys, families = [k for k, _, _ in cols], [f for _, _, f in cols]
-    diff = column_errors(result.compared[:n, 1:], half.compared[:n, 1:], keys, families, result.system)
+    diff = column_errors(result.compared[same, 1:], half.compared[at[same], 1:], keys, families, result.system)
     factor = 2.0**order / (2.0**order - 1.0)
     return {"estimated_error": dict(zip(keys, (float(factor * d) for d in diff))), "status": "step-halving",
             "method": f"step halving: |x(dt) - x(dt/2)| x 2^p/(2^p - 1), p = {order} (convergence on hysteretic "
                       "scenes is irregular: this can be optimistic)"}
 
 
-def warnings_for(accuracy: dict, settings, stats=None) -> list[str]:
+#: a column whose peak stays below this fraction of its family's scale (a torsion beside the
+#: rocking, a cross acceleration) warns only where its error is above warn_error of that scale
+QUIET = 0.1
+
+
+def family_terms(errors: dict, result, measure: str = "the run's") -> tuple[dict, set]:
+    """(each column's error against its family's scale, the quiet columns): ``errors`` (key ->
+    max_t |x - x_ref| / its scale, column_errors' measure) restated in the terms of the column's
+    family (translations with translations, rotations at the radius of gyration, forces with
+    forces, moments with moments, accelerations with accelerations: error_scales), from the
+    run's own peaks; quiet: the columns whose peak is below QUIET of the family's scale."""
+    cols = estimate_columns(result.layout)
+    keys, families, columns = [k for k, _, _ in cols], [f for _, _, f in cols], [c for _, c, _ in cols]
+    e = result.extremes
+    peaks = np.maximum(np.abs(e.max[columns]), np.abs(e.min[columns]))
+    own = error_scales(peaks, keys, families, result.system)
+    family = family_scales(peaks, keys, families, result.system)
+    out, quiet = {}, set()
+    for k, p, o, f in zip(keys, peaks, own, family):
+        if k in errors and f > 0:
+            out[k] = errors[k] * o / f
+            if p < QUIET * f:
+                quiet.add(k)
+    return out, quiet
+
+
+def family_scales(peak: np.ndarray, keys, families, system: System) -> np.ndarray:
+    """Each column's family's scale (error_scales): the family's largest peak in its measure."""
+    length = _to_length(keys, system)
+    index: dict = {}
+    family = np.array([index.setdefault(f, len(index)) for f in families], dtype=np.intp)
+    top = np.zeros(len(index))
+    np.maximum.at(top, family, peak * length)  # each family's largest peak, in its measure
+    return top[family] / length
+
+
+def ranked(errors: dict, limit: float, family: dict | None = None, quiet=()) -> list[tuple[str, float]]:
+    """The columns above ``limit`` that matter, largest first in their family's terms: (key,
+    error). A quiet column (family_terms) counts only where its error in its family's terms is
+    also above ``limit``: a column the scene leaves nearly at rest does not headline a warning."""
+    family = family or {}
+    over = [(k, v) for k, v in errors.items()
+            if v > limit and (k not in quiet or family.get(k, v) > limit)]
+    return sorted(over, key=lambda kv: (family.get(kv[0], kv[1]), kv[1]), reverse=True)
+
+
+def warnings_for(accuracy: dict, settings, stats=None, result=None) -> list[str]:
     """The warnings an estimate calls for, with what would do. ``stats`` (the run's RunStats):
     where the stiffness monitor already split the steps, the error belongs to the split step,
-    and the dt that would do is scaled from that."""
+    and the dt that would do is scaled from that. ``result``: the run, whose peaks put each
+    error in its family's terms (family_terms: the warning lists those that matter first)."""
     if accuracy is None:
         return []
     if accuracy["status"] == "unavailable":
         return [f"the error could not be estimated: {accuracy['method']}"]
     err = accuracy["estimated_error"]
-    name, worst = max(err.items(), key=lambda kv: kv[1])
+    family, quiet = family_terms(err, result) if result is not None and result.layout is not None else ({}, set())
+    over = ranked(err, settings.warn_error, family, quiet)
+    name, worst = over[0] if over else (max(err.items(), key=lambda kv: kv[1]) if not family else ("", 0.0))
     out = []
     if accuracy["status"] == "sensitive":
         spread = max(accuracy["reference_spread"].values())
@@ -473,13 +532,13 @@ def warnings_for(accuracy: dict, settings, stats=None) -> list[str]:
         if settings.integrator != "adaptive":
             step = settings.dt  # the compute step the error belongs to, where the run split dt
             if stats is not None:
-                step = settings.dt / stats.record_substeps / 2**stats.max_substep_level
-            dt = step * 0.7 * (settings.warn_error / worst) ** 0.5
+                step = settings.dt / stats.record_substeps / stats.refine / 2**stats.max_substep_level
+            dt = step * 0.5 * (settings.warn_error / worst) ** 0.5  # (a margin for the estimate's own error)
             hint = f"; dt = {dt:.3g} s, --integrator adaptive, or --tolerance {settings.warn_error:g} would do"
         else:
             hint = f"; --tolerance {settings.warn_error:g} would do"
-        over = sorted(((v, k) for k, v in err.items() if v > settings.warn_error and k != name), reverse=True)
-        also = ", ".join(f"{k} {v:.2%}" for v, k in over[:WARN_NAMES])
+        over = over[1:]
+        also = ", ".join(f"{k} {v:.2%}" for k, v in over[:WARN_NAMES])
         also += f" and {len(over) - WARN_NAMES} more" if len(over) > WARN_NAMES else ""
         also = f" (also {also})" if also else ""
         out.append(f"estimated error {worst:.2%} in {name}{also} exceeds analysis.warn_error = "

@@ -26,16 +26,62 @@ from rbhyst.errors import AnalysisError
 CHECK_FRACTION = 0.1
 
 
-def kinematics_summary(result, settings) -> dict:
+def kinematics_summary(result, settings, exact=None) -> dict:
     """summary.json's ``kinematics``: the model, the largest rotation, and the difference from
-    exact kinematics per column where the rotation makes it matter (see the module docstring)."""
-    from rbhyst.model.kinematics import exact_twin
+    exact kinematics per column where the rotation makes it matter (see the module docstring).
+    ``exact``: the same run with exact kinematics where it was made already (the answer that
+    analysis.kinematics = "auto" chose: rbhyst.solve.choose)."""
+    system = result.system
+    out, start = rotation_extent(result)
+    if "max_rotation_rad" not in out:
+        return out
+    if system.kinematics == "exact":
+        out["difference"] = None
+        out["method"] = "exact rotations: no kinematic error"
+        return out
+    if result.compared is None:
+        out["difference"] = None
+        out["method"] = "not computed: the run kept no rows to compare"
+        return out
+    indicator, where = neglected_share(result, start)
+    out["neglected"] = {"column": where, "share": indicator}
+    if exact is None and indicator <= CHECK_FRACTION * settings.warn_error:
+        out["difference"] = None
+        out["method"] = (f"not computed: the terms the small rotations neglect reach {indicator:.3g} of {where} "
+                         f"along the run, below {CHECK_FRACTION:g} x warn_error")
+        return out
+    if exact is None:
+        try:
+            exact = exact_run(result, settings)
+        except AnalysisError as err:
+            out["difference"] = None
+            out["method"] = f"not computed: the run with exact kinematics failed: {err}"
+            return out
+        if exact is None:
+            out["difference"] = None
+            out["method"] = "not computed: exact kinematics are built for the plane and the body in space only"
+            return out
+    diff = difference(result, exact)
+    if diff is None:
+        out["difference"] = None
+        out["method"] = "not computed: the run with exact kinematics compares other rows"
+        return out
+    out["difference"] = diff
+    worst = max(diff, key=diff.get)
+    out["worst"] = {"column": worst, "difference": diff[worst]}
+    out["method"] = (f"the same run with exact kinematics ({settings.integrator}, dt = {settings.dt:g} s), "
+                     "max_t |small - exact| / max_t |exact| per column")
+    return out
 
+
+def rotation_extent(result) -> tuple[dict, object]:
+    """({"model", "max_rotation_rad"}, the rotation at rest) of a run; no max_rotation_rad for a
+    body that does not turn (the start then None)."""
     system = result.system
     rot = next((j for j, c in enumerate(system.coordinates) if c.rotation), None)
     out: dict = {"model": system.kinematics}
     if rot is None:
-        return out
+        return out, None
     key = system.coordinates[rot].column("d")
     start = float(system.static.q[rot]) if system.static is not None else 0.0
     e = result.extremes
@@ -51,51 +97,59 @@ def kinematics_summary(result, settings) -> dict:
             i = e.names.index(system.coordinates[j].column("d"))
             theta = max(theta, abs(start_q[j] + e.max[i]), abs(start_q[j] + e.min[i]))
         out["max_rotation_rad"] = theta
-    if system.kinematics == "exact":
-        out["difference"] = None
-        out["method"] = "exact rotations: no kinematic error"
-        return out
-    if result.compared is None:
-        out["difference"] = None
-        out["method"] = "not computed: the run kept no rows to compare"
-        return out
-    indicator, where = (model_residual_space if len(spins) > 1 else model_residual)(result, start)
-    out["neglected"] = {"column": where, "share": indicator}
-    if indicator <= CHECK_FRACTION * settings.warn_error:
-        out["difference"] = None
-        out["method"] = (f"not computed: the terms the small rotations neglect reach {indicator:.3g} of {where} "
-                         f"along the run, below {CHECK_FRACTION:g} x warn_error")
-        return out
-    twin = exact_twin(system)
-    if twin is None:
-        out["difference"] = None
-        out["method"] = "not computed: exact kinematics are built for the plane and the body in space only"
-        return out
-    from rbhyst.solve.estimate import column_errors
+    return out, start
+
+
+def neglected_share(result, start=None) -> tuple[float, str]:
+    """(share, column): the largest share of a column the small rotations' neglected terms reach
+    along a small-rotation run's compared rows (model_residual, or model_residual_space in space);
+    (0, "") for a body that does not turn."""
+    if start is None:
+        _, start = rotation_extent(result)
+        if start is None:
+            return 0.0, ""
+    spins = [c for c in result.system.coordinates if c.rotation]
+    return (model_residual_space if len(spins) > 1 else model_residual)(result, start)
+
+
+def needs_exact(result, settings) -> tuple[bool, float, str]:
+    """(whether analysis.kinematics = "auto" takes exact kinematics, the neglected share, its
+    column): exact where the terms the small rotations neglect exceed CHECK_FRACTION x warn_error
+    in any compared column, judged along the small-rotation run ``result``."""
+    if result.system.kinematics == "exact" or result.compared is None:
+        return False, 0.0, ""
+    share, where = neglected_share(result)
+    return share > CHECK_FRACTION * settings.warn_error, share, where
+
+
+def exact_run(result, settings, answer: bool = False, keep: bool = False, csv=None, progress=None):
+    """The run of ``result`` again with exact kinematics (same method, step and compared rows),
+    its error not estimated; None where exact kinematics are not built for the body. ``answer``:
+    the run is the answer (its spectra too, its rows kept or streamed as ``keep`` and ``csv``
+    say), not only the measure of the small rotations' error."""
+    from rbhyst.model.kinematics import exact_twin
     from rbhyst.solve.plan import prepare
 
-    s = dataclasses.replace(settings, estimate=False, spectra=None)
-    try:
-        exact = prepare(twin, s).run(keep=False, compare_every=result.compare_every)
-    except AnalysisError as err:
-        out["difference"] = None
-        out["method"] = f"not computed: the run with exact kinematics failed: {err}"
-        return out
-    if exact.compared is None or exact.compared.shape != result.compared.shape:
-        out["difference"] = None
-        out["method"] = "not computed: the run with exact kinematics compares other rows"
-        return out
+    twin = exact_twin(result.system)
+    if twin is None:
+        return None
+    s = dataclasses.replace(settings, estimate=False, **({} if answer else {"spectra": None}))
+    return prepare(twin, s).run(keep=keep, csv=csv, compare_every=result.compare_every, progress=progress)
+
+
+def difference(result, exact) -> dict | None:
+    """max_t |small - exact| / max_t |exact| per compared column (the error estimate's measure,
+    each against its family's scale), or None where the two runs compare other rows."""
+    from rbhyst.solve.estimate import column_errors
     from rbhyst.solve.history import estimate_columns
 
+    if exact.compared is None or result.compared is None or exact.compared.shape != result.compared.shape:
+        return None
     columns = estimate_columns(result.layout)
     keys = [k for k, _, _ in columns]
-    diff = column_errors(result.compared[:, 1:], exact.compared[:, 1:], keys, [f for _, _, f in columns], system)
-    out["difference"] = dict(zip(keys, map(float, diff)))
-    worst = int(np.argmax(diff))
-    out["worst"] = {"column": keys[worst], "difference": float(diff[worst])}
-    out["method"] = (f"the same run with exact kinematics ({settings.integrator}, dt = {settings.dt:g} s), "
-                     "max_t |small - exact| / max_t |exact| per column")
-    return out
+    diff = column_errors(result.compared[:, 1:], exact.compared[:, 1:], keys, [f for _, _, f in columns],
+                         result.system)
+    return dict(zip(keys, map(float, diff)))
 
 
 def model_residual(result, start: float) -> tuple[float, str]:
@@ -133,6 +187,16 @@ def model_residual(result, start: float) -> tuple[float, str]:
     top = float(largest_abs(rows[:, [columns[key]]])[0])
     if top > 0 and dr / top > best:
         best, where = float(dr / top), key
+    # the forces' resultant: where the elements' first-order deformations cancel in it (a body
+    # rocking on mounts either side of G), the second-order ones they neglect do not
+    angles = np.radians([el.angle_deg for el in system.elements for _ in range(el.count)])
+    du_t = b3[None, :] * (np.sin(theta) - theta)[:, None] + c[None, :] * (np.cos(theta) - 1.0)[:, None]
+    # (at the stiffest tangent, the reversal's: a mount cycling about a point is that stiff)
+    k_rev = system.expand(system.k_reversal[None, :])[0]
+    share_r, key_r = resultant_share(du_t * k_rev[None, :], np.column_stack([np.cos(angles), np.sin(angles)]),
+                                     rows, columns, system)
+    if share_r > best:
+        best, where = share_r, key_r
     for name, x in layout.points:
         keys = [k for k in columns if k.startswith(f"{name}_") and k[len(name) + 1:].startswith("u")]
         top = max(np.max(np.abs(rows[:, columns[k]])) for k in keys) if keys else 0.0
@@ -173,6 +237,12 @@ def model_residual_space(result, start: np.ndarray) -> tuple[float, str]:
         share = np.where(scale > 0, np.max(np.abs(du), axis=0) / scale, 0.0)
     if share.size and share.max() > best:
         best, where = float(share.max()), f"e{int(share.argmax()) + 1}_u"
+    # the forces' resultant, as in the plane: the second-order deformations at the reversal's
+    # stiffness, summed
+    k_rev = system.expand(system.k_reversal[None, :])[0]
+    share_r, key_r = resultant_share(du * k_rev[None, :], ds, rows, columns, system)
+    if share_r > best:
+        best, where = share_r, key_r
     # the moment about G of the forces at their turned points, beyond the small rotations' share
     arms = np.einsum("kij,ej->kei", matrices(theta) - np.eye(3)[None], xs) - np.cross(theta[:, None, :], xs[None])
     dm = np.einsum("ke,kei->ki", forces, np.cross(arms, ds[None]))
@@ -190,22 +260,48 @@ def model_residual_space(result, start: np.ndarray) -> tuple[float, str]:
     return best, where
 
 
-def kinematics_warning(kinematics: dict | None, warn_error: float) -> list[str]:
+def resultant_share(df: np.ndarray, directions: np.ndarray, rows: np.ndarray, columns: dict,
+                    system) -> tuple[float, str]:
+    """(share, key): the largest of the translational resultant's columns (R1, R2, and R3 in
+    space) that the neglected forces ``df`` (k, elements: each element's neglected deformation
+    times its stiffest tangent) along their ``directions`` (elements, 2 or 3: deck axes) reach, against the
+    column's error scale (estimate.error_scales: its peak, or its family's where it is small)."""
+    from rbhyst.solve.estimate import error_scales
+
+    moving = [c for c in system.coordinates if not c.rotation]
+    keys = [c.key("R") for c in moving][:directions.shape[1]]
+    if not keys or df.size == 0:
+        return 0.0, ""
+    dr = np.abs(df @ directions[:, :len(keys)]).max(axis=0)
+    peaks = np.array([float(np.max(np.abs(rows[:, columns[k]]))) for k in keys])
+    scales = error_scales(peaks, keys, ["R"] * len(keys), system)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        share = np.where(scales > 0, dr / scales, 0.0)
+    j = int(np.argmax(share))
+    return float(share[j]), keys[j]
+
+
+def kinematics_warning(kinematics: dict | None, warn_error: float, result=None) -> list[str]:
     """One warning where the small rotations cost more than warn_error (or may, where it was
-    not computed), with the numbers and what to do."""
+    not computed), with the numbers and what to do; the columns that matter first, in their
+    family's terms (estimate.family_terms of ``result``'s peaks)."""
+    from rbhyst.solve.estimate import family_terms, ranked
+
     if not kinematics or kinematics.get("model") != "small" or "max_rotation_rad" not in kinematics:
         return []
     theta = kinematics["max_rotation_rad"]
     diff = kinematics.get("difference")
     if diff:
-        worst = kinematics["worst"]
-        if worst["difference"] <= warn_error:
+        family, quiet = family_terms(diff, result) if result is not None and result.layout is not None else ({}, set())
+        over = ranked(diff, warn_error, family, quiet)
+        if not over:
             return []
-        more = sorted(((v, k) for k, v in diff.items() if v > warn_error and k != worst["column"]), reverse=True)
-        also = f" (also {', '.join(f'{k} {v:.3g}' for v, k in more[:4])}{' ...' if len(more) > 4 else ''})" if more else ""
-        return [f"the seed's small rotations (eqs. 7-8) differ from exact kinematics by {worst['difference']:.2%} in "
-                f"{worst['column']}{also}, above analysis.warn_error = {warn_error:g}; the body turns by up to "
-                f"{theta:.3g} rad: set analysis.kinematics = \"exact\""]
+        (name, worst), more = over[0], over[1:]
+        also = f" (also {', '.join(f'{k} {v:.2%}' for k, v in more[:4])}{' ...' if len(more) > 4 else ''})" if more else ""
+        return [f"the seed's small rotations (eqs. 7-8) differ from exact kinematics by {worst:.2%} in "
+                f"{name}{also}, above analysis.warn_error = {warn_error:g}; the body turns by up to "
+                f"{theta:.3g} rad: set analysis.kinematics = \"exact\" (or leave it out: \"auto\" takes exact "
+                "kinematics where they matter)"]
     neglected = kinematics.get("neglected") or {}
     if neglected.get("share", 0.0) > warn_error:
         return [f"the terms the seed's small rotations (eqs. 7-8) neglect reach {neglected['share']:.2%} of "

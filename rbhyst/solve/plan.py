@@ -17,7 +17,8 @@ from rbhyst.solve import integrators
 from rbhyst.solve.kernels import layout as kernels
 from rbhyst.solve.kernels.compiled import jit_compiled, kernel
 from rbhyst.errors import AnalysisError, InputError, byte_size
-from rbhyst.solve.history import Extremes, Layout, PlotData, Raw, body_spectrum_columns, estimate_columns
+from rbhyst.solve.history import (Extremes, Layout, PlotData, Raw, body_spectrum_columns, estimate_columns,
+                                  fold_extremes)
 from rbhyst.solve.kernels.layout import N_STATE, N_W, X_CUR, X_ITER, X_LEVEL_USED, X_OMEGA_DT2, X_STEPS, X_SUBSTEPS, n_x, x_slice
 from rbhyst.model.kinematics import loads_at
 from rbhyst.model.system import System
@@ -35,7 +36,15 @@ def grid(system: System, s: Settings) -> tuple[int, int]:
     """(output steps, the most compute steps per output step): an excitation finer than dt is
     followed, not aliased (see Excitation.substeps)."""
     n_steps = output_steps(system, s)
-    return n_steps, int(system.excitation.substeps(s.dt, n_steps)[1].max())
+    return n_steps, int(splitting(system, s, n_steps)[1].max())
+
+
+def splitting(system: System, s: Settings, n_steps: int) -> tuple[np.ndarray, np.ndarray]:
+    """(bounds, substeps): output steps bounds[i]..bounds[i + 1] take substeps[i] compute steps
+    each, those that follow the excitation (Excitation.substeps) times ``s.refine``, the
+    refinement that meets the accuracy (rbhyst.solve.choose)."""
+    bounds, substeps = system.excitation.substeps(s.dt, n_steps)
+    return bounds, substeps * s.refine if s.refine > 1 else substeps
 
 
 def output_steps(system: System, s: Settings) -> int:
@@ -60,16 +69,18 @@ def compute_times(bounds: np.ndarray, substeps: np.ndarray, dt: float) -> np.nda
 
 
 class Rows:
-    """Where a run's rows go: reductions over every step, every ``every``-th row kept or
-    streamed, the columns its error estimate compares at every ``compare_every``-th step,
-    and the response spectra of G and the points at every compute step."""
+    """Where a run's rows go: reductions over every compute step, every ``every``-th output row
+    kept or streamed, the columns its error estimate compares at every ``compare_every``-th
+    compute step, and the response spectra of G and the points at every compute step."""
 
     def __init__(self, layout: Layout, n_steps: int, every: int, keep: bool, csv=None,
-                 spectra=None, dt: float | None = None, compare_every: int | None = None):
+                 spectra=None, dt: float | None = None, compare_every: int | None = None,
+                 compute_steps: int | None = None):
         """csv: where the written rows also go, a function of the column names that opens a
         writer (``add(rows)``, ``close()``, ``path``; rbhyst.results.writers.CsvWriter), or None;
         spectra: (dampings, periods) of the response spectra to stream (Settings.spectra), for
-        rows ``dt`` apart (or as :meth:`add` says); None for none."""
+        rows ``dt`` apart (or as :meth:`add` says); None for none. compute_steps: of the whole
+        run, where steps of dt are split (Plan.compute_steps; n_steps where they are not)."""
         self.layout = layout
         self.every = every
         self.dt = dt
@@ -82,9 +93,12 @@ class Rows:
         self._kept = np.empty((len(layout.names), n_rows)).T if keep else None
         self._csv = csv(layout.names) if csv is not None else None
         self._next = 0  # global index of the next row
-        # the columns the error estimate compares (rbhyst.solve.estimate), at every compare_every-th step
+        self._node = 0  # ... and of the next compute node's
+        # the columns the error estimate compares (rbhyst.solve.estimate), at every compare_every-th
+        # compute step: where a step of dt is split, its error between the rows is the run's too
         self._compare_columns = np.array([0] + [c for _, c, _ in estimate_columns(layout)])
-        self.compare_every = compare_every or max(1, -(-(n_steps + 1) * len(self._compare_columns) // COMPARE_VALUES))
+        nodes = (compute_steps if compute_steps is not None else n_steps) + 1
+        self.compare_every = compare_every or max(1, -(-nodes * len(self._compare_columns) // COMPARE_VALUES))
         self._compared: list[np.ndarray] = []
         self.spectra = None
         if spectra is not None:
@@ -96,18 +110,22 @@ class Rows:
 
     def add(self, raw: Raw, sub: int = 1) -> None:
         """Rows of consecutive steps; with ``sub`` > 1, rows of every compute step of dt / sub,
-        of which every sub-th (the last of each output step) is an output row: the spectra see
-        them all, everything else the output rows."""
+        of which every sub-th (the last of each output step) is an output row: the spectra and
+        the extremes (every peak) see them all, everything else the output rows."""
         n = len(raw.t) // sub
         direct = self._kept is not None and self.every == 1 and sub == 1
         table = self.layout.table(raw, out=self._kept[self._next:self._next + n] if direct else None)
         if self.spectra is not None:  # every compute step, whatever output.every writes
             self.spectra.update(table[:, self._spectrum_columns], self.dt / sub)
+        first = (-self._node) % self.compare_every
+        self._compared.append(table[first::self.compare_every][:, self._compare_columns])
+        self._node += len(table)
         if sub > 1:
+            # the peaks of the motion, not of the rows: a step of dt split to follow a record or
+            # a pulse has its peaks between the rows
+            fold_extremes(np.asfortranarray(table), self.extremes)
             table = table[sub - 1::sub]
         self.plot.update(table, self.extremes)
-        first = (-self._next) % self.compare_every
-        self._compared.append(table[first::self.compare_every][:, self._compare_columns])
         first = (-self._next) % self.every
         written = table[first::self.every]
         if self._kept is not None and not direct:
@@ -124,7 +142,7 @@ class Rows:
     @property
     def compared(self) -> np.ndarray:
         """(n, 1 + columns): time and the estimate's columns (history.estimate_columns) at every
-        compare_every-th step."""
+        compare_every-th compute step."""
         return np.vstack(self._compared)
 
     @property
@@ -181,7 +199,7 @@ class Plan:
         self.system, self.settings, self.method = system, s, method
         self.n_steps = output_steps(system, s)
         # runs of output steps split alike (Excitation.substeps), and the most compute steps a step
-        self.bounds, self.substeps = system.excitation.substeps(s.dt, self.n_steps)
+        self.bounds, self.substeps = splitting(system, s, self.n_steps)
         self.nsub = int(self.substeps.max())
         self.compute_steps = int(np.sum(np.diff(self.bounds) * self.substeps))  # (the rows of a tap, a companion)
 
@@ -341,20 +359,10 @@ class FixedStepPlan(Plan):
                           np.zeros((ne, n_q)), np.zeros((N_W, n_q)), np.zeros((n_q, n_q)), buf.d, buf.v, buf.u, buf.f, buf.e,
                           buf.fb, levels, force, info)
 
-    def compared_nodes(self, every: int):
-        """The compute node of every ``every``-th output step, from t = 0 (the rows a run's estimate
-        compares: Rows.compare_every): a slice where they are evenly spaced (a view, not a
-        gather), else their indices."""
-        if len(set(self.substeps.tolist())) == 1:  # (every output step as many compute steps)
-            step = every * int(self.substeps[0])
-            return slice(0, (self.n_steps // every) * step + 1, step)
-        out = np.empty(self.n_steps + 1, dtype=np.int64)
-        out[0] = 0
-        np.cumsum(np.repeat(self.substeps, np.diff(self.bounds)), out=out[1:])
-        rows = out[::every]
-        if len(rows) > 1 and np.all(np.diff(rows) == rows[1] - rows[0]):
-            return slice(0, int(rows[-1]) + 1, int(rows[1] - rows[0]))
-        return rows
+    def compared_nodes(self, every: int) -> slice:
+        """Every ``every``-th compute node from t = 0 (the rows a run's estimate compares:
+        Rows.compare_every)."""
+        return slice(0, (self.compute_steps // every) * every + 1, every)
 
     @functools.cached_property
     def rb(self) -> np.ndarray:
@@ -472,11 +480,11 @@ class FixedStepPlan(Plan):
         ne, n = self.bvec.shape
         x, st = self.initial_state()
         spectra = s.spectra is not None
-        # the spectra see every compute step where the excitation is split (a short pulse's
-        # response between the rows), and so does a tap; without either no such row is made
-        fine = spectra or tap is not None
+        # the spectra, the peaks and a tap see every compute step where a step of dt is split (a
+        # short pulse's response between the rows)
+        fine = spectra or tap is not None or self.nsub > 1
         rows = Rows(self.layout, self.n_steps, s.every, keep, csv, spectra=s.spectra, dt=s.dt,
-                    compare_every=compare_every)
+                    compare_every=compare_every, compute_steps=self.compute_steps)
         wall = 0.0
         try:
             rows.add(self.start_row(x, st))
@@ -484,16 +492,14 @@ class FixedStepPlan(Plan):
                 wall += took
                 if tap is not None:
                     tap(load, raw, levels)
-                sub = nsub if fine else 1
-                if sub > 1 and not spectra:  # (for the tap only: the rows are the output steps')
-                    raw, sub = raw.slice(sub - 1, None, sub), 1
-                rows.add(raw, sub=sub)
+                rows.add(raw, sub=nsub if fine else 1)
                 if progress is not None:
                     progress(first + n_out, self.n_steps, f"{s.integrator}: time stepping")
         finally:
             table = rows.close()
         stats = RunStats(
-            steps=self.n_steps, record_substeps=self.nsub, min_substep_level=max(self.level0.values()),
+            steps=self.n_steps, record_substeps=self.nsub // s.refine, refine=s.refine,
+            min_substep_level=max(self.level0.values()),
             substeps=int(x[X_SUBSTEPS]), max_substep_level=int(x[X_LEVEL_USED]),
             max_omega_dt=float(math.sqrt(x[X_OMEGA_DT2])), steps_taken=int(x[X_STEPS]),
             newton_iterations=int(x[X_ITER]) if self.method.name == "newmark" else 0, wall_s=wall,

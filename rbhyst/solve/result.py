@@ -29,6 +29,7 @@ class RunStats:
 
     steps: int  # output steps of dt
     record_substeps: int = 1  # compute steps per dt to follow a finer excitation
+    refine: int = 1  # ... times this, for the accuracy (rbhyst.solve.choose)
     min_substep_level: int = 0  # every step split in 2**this for omega_0 h (structure-dependent methods)
     substeps: int = 0  # extra substeps taken where the stiffness needed them
     max_substep_level: int = 0
@@ -56,6 +57,9 @@ class Result:
     accuracy: dict | None = None
     csv_path: Path | None = None  # where the rows went when they were streamed
     solver: dict | None = None  # what an adaptive integration took (steps, reversals, ...)
+    #: how rbhyst chose the compute step and kinematics of a deck that names no integrator
+    #: (rbhyst.solve.choose): summary.json's analysis.chosen
+    chosen: dict | None = None
     #: (n, 1 + k) time and the columns the error estimate compares (history.estimate_columns), at
     #: every ``compare_every``-th step
     compared: np.ndarray | None = None
@@ -169,6 +173,7 @@ class Result:
                 "duration_s": st.steps * s.dt,
                 "output_every": s.every,
                 "record_substeps": st.record_substeps,
+                **({"accuracy_substeps": st.refine} if st.refine > 1 else {}),
                 "stiffness_substeps": st.substeps,
                 "k0_substep_level": st.min_substep_level,
                 "max_substep_level": st.max_substep_level,
@@ -178,6 +183,7 @@ class Result:
                 "newton_iterations": st.newton_iterations,
                 "wall_s": st.wall_s,
                 **({"rtol": s.rtol, "adaptive": self.solver} if self.solver is not None else {}),
+                **({"chosen": self.chosen} if self.chosen is not None else {}),
             },
             "energy": self.energy_summary(),
             "accuracy": self.accuracy,

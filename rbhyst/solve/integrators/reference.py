@@ -325,7 +325,7 @@ def solve_with_stats(system, settings, rtol: float = RTOL, t_out: np.ndarray | N
     in a fixed-step run), or at the increasing times ``t_out`` (from 0) if given, all kept: a
     study asks for the union of several grids.
     """
-    from rbhyst.solve.plan import Rows, compute_times, grid, run_spectra
+    from rbhyst.solve.plan import Rows, compute_times, grid, run_spectra, splitting
 
     n_steps, _ = grid(system, settings)
     every = 1
@@ -338,8 +338,10 @@ def solve_with_stats(system, settings, rtol: float = RTOL, t_out: np.ndarray | N
             raise InputError(f"output.every: {settings.every} is more than the {n_steps} steps of the analysis")
         every = settings.every
         spectra = settings.spectra
-        if spectra is not None:
-            bounds, substeps = system.excitation.substeps(settings.dt, n_steps)
+        bounds, substeps = splitting(system, settings, n_steps)
+        if spectra is not None or substeps.max() > 1:
+            # the solution at every compute step the fixed-step methods would take: the spectra
+            # are driven there, and the peaks between the rows are seen (Rows.add)
             t_out = np.concatenate([[0.0], compute_times(bounds, substeps, settings.dt)])
             segments = (bounds, substeps)
         else:
@@ -347,7 +349,8 @@ def solve_with_stats(system, settings, rtol: float = RTOL, t_out: np.ndarray | N
     sol = integrate(system, t_out, rtol)
     raw = sol.raw(system)
     layout = Layout(system, settings.points)
-    rows = Rows(layout, n_steps if segments else len(sol.t) - 1, every, keep, csv, spectra=spectra, dt=settings.dt)
+    rows = Rows(layout, n_steps if segments else len(sol.t) - 1, every, keep, csv, spectra=spectra, dt=settings.dt,
+                compute_steps=len(sol.t) - 1)
     try:
         rows.add(raw.slice(0, 1))
         if segments is None:

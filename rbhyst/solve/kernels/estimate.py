@@ -122,8 +122,8 @@ def companion_estimate(method, coefs, mass, minv, cm, damped, bvec, axial, rot, 
     companion); the run's tap (load, t, levels at every compute node, d_run, v_run, f_run, a0,
     the start state x0, st0) and companion_source's other arguments (modified: the method's
     code, minv_a and mass_a M^-1 and M as arrays, into extra, offset with a_w, h_w, near_w);
-    take: the compared nodes (plan.compared_nodes: the compute node of every ``every``-th
-    output step from t = 0, node 0 first) written here, picks: them after node 0;
+    take: the compared nodes (plan.compared_nodes: every ``every``-th compute node from t = 0,
+    node 0 first) written here, picks: them after node 0;
     largest_change's arguments (minv_t: the table's M^-1) through dd, dv, df. The rest is work
     space: the companion's rows in out_d, out_v and out_u or out_f (``whole``: every node; its
     forces re-driven into f_re where a step was split), the probe's in the same arrays' first
@@ -136,20 +136,12 @@ def companion_estimate(method, coefs, mass, minv, cm, damped, bvec, axial, rot, 
     ne = f_run.shape[1]
     companion_source(modified, load, v_run, f_run, a0, rb, c, damped, minv_a, mass_a, k0, t, levels, bounds,
                      substeps, dt, breaks, a_w, h_w, near_w, extra, offset, n_w[0], n_w[1], n_w[2])
-    # the compared nodes, from the output steps' substeps
+    # the compared nodes: every ``every``-th compute node (plan.compared_nodes)
     take[0] = 0
-    p, node, k = 1, 0, 0
-    for s in range(substeps.shape[0]):
-        for _ in range(bounds[s + 1] - bounds[s]):
-            node += substeps[s]
-            k += 1
-            if k % every == 0:
-                if p == take.shape[0]:
-                    return FAILED
-                take[p] = node
-                picks[p - 1] = node
-                p += 1
-    if p != take.shape[0]:
+    for p in range(1, take.shape[0]):
+        take[p] = p * every
+        picks[p - 1] = p * every
+    if take[take.shape[0] - 1] >= nodes:
         return FAILED
     split = False
     for k in range(levels.shape[0]):
