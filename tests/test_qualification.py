@@ -448,7 +448,7 @@ def test_a_demand_beyond_its_capacity_fails_with_exit_1(tmp_path):
 
 
 def test_a_run_that_cannot_vouch_for_its_accuracy_cannot_pass(tmp_path):
-    deck = _cabinet(tmp_path, analysis={"dt": 0.004, "integrator": "chang"})  # (named: exactly at that dt)
+    deck = _cabinet(tmp_path, analysis={"dt": 0.005, "integrator": "chang"})  # (named: exactly at that dt)
     code, err = invoke("qualify", deck, "--out", tmp_path / "q", "--no-plots")
     q = json.loads((tmp_path / "q" / "qualification.json").read_text())
     assert code == 1 and not q["pass"] and not q["accuracy"]["pass"]

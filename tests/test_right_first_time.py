@@ -245,3 +245,53 @@ def test_a_response_no_mounted_body_survives_is_named(tmp_path):
     assert not any("shock test" in w for w in res.warnings)
     [moves] = [w for w in res.warnings if w.startswith("the body moves by up to")]
     assert "times its size (0.5 m)" in moves and res.extremes.peak("u1_m") > 1.0
+
+
+# ------------------------------------------------------------------ records followed exactly
+
+
+def record_deck(tmp_path, rng_seed: int, record_dt: float, dt: float, tail: float = 0.0) -> dict:
+    """The seed's body under a random record (0.6 s, not ending at zero) along x2."""
+    rng = np.random.default_rng(rng_seed)
+    values = np.convolve(rng.normal(0.0, 0.3, 300), np.ones(3) / 3, mode="same")
+    assert abs(values[-1]) > 0.01  # (it ends with a jump to zero)
+    np.savetxt(tmp_path / "rec.csv", values, header="acc_g", comments="")
+    data = seed_deck(duration=0.6 + tail, dt=dt, kinematics="small")
+    data["excitation"] = {"support": {"x2": {"file": "rec.csv", "units": "g", "dt": record_dt}}}
+    return data
+
+
+def true_max_error(res) -> float:
+    cols = estimate_columns(res.layout)
+    index, keys, families = [c for _, c, _ in cols], [k for k, _, _ in cols], [f for _, _, f in cols]
+    ref = res.layout.table(reference.integrate(res.system, res.time, rtol=1e-12).raw(res.system))[:, index]
+    return float(np.max(column_errors(res.table[:, index], ref, keys, families, res.system)))
+
+
+@pytest.mark.parametrize("method", ["chang", "newmark"])
+def test_a_record_that_ends_off_zero_costs_no_order(tmp_path, method):
+    """A record's end is a jump to zero: taken at the nodes it cost every method an order (2 % in
+    an element force at 0.2 ms, halving with dt, unseen by the estimate); with the node's hat
+    average it is second order again, and the estimate holds the error."""
+    path = write_deck(tmp_path, record_deck(tmp_path, 11, 0.002, 4e-4, tail=0.4))
+    errors = [true_max_error(rbhyst.run(path, integrator=method, dt=dt, estimate=False)) for dt in (4e-4, 2e-4)]
+    assert errors[0] / errors[1] > 3.0, errors
+    res = rbhyst.run(path, integrator=method, dt=2e-4)
+    assert 0.5 <= max(res.accuracy["estimated_error"].values()) / errors[1] <= 2.0
+
+
+def test_a_record_whose_samples_fall_between_dt_s_nodes_is_followed_on_them(tmp_path):
+    """A 2 ms record at dt = 5 ms: 5 compute steps a step (every sample on a node), not 3 (whose
+    nodes would make another, smoother record); at dt = 3 ms, 3 (a coarser record, off dt's
+    nodes). The run then converges to the reference at the method's order."""
+    from rbhyst.model.system import record_alignment
+
+    assert record_alignment(0.005, 0.002) == 5 and record_alignment(0.003, 0.002) == 3
+    assert record_alignment(0.001, 0.01) == 1 and record_alignment(1.0, 0.01) == 100
+    assert record_alignment(0.001, 0.01, start=0.0005) == 2 and record_alignment(0.001, np.pi * 1e-3) == 1
+    # (no free vibration after it: there a step of dt is one compute step again)
+    path = write_deck(tmp_path, record_deck(tmp_path, 12, 0.002, 0.005))
+    res = rbhyst.run(path, integrator="chang", estimate=False)
+    assert res.stats.record_substeps == 5
+    errors = [true_max_error(rbhyst.run(path, integrator="chang", dt=dt, estimate=False)) for dt in (0.005, 0.0025)]
+    assert errors[0] / errors[1] > 3.0, errors

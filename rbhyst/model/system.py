@@ -27,6 +27,68 @@ from rbhyst.model.records import Series, read_record
 Signal = Callable[[np.ndarray], np.ndarray]
 
 
+class RecordEdges:
+    """A record as signals.hat_average sees it near where it jumps (its start after t = 0 and its
+    end, where its first and last samples are not zero: it is zero outside them): the samples
+    near them are its breakpoints, so that the hat's halves are integrated piece by piece."""
+
+    def __init__(self, series, jumps: tuple[float, ...], h: float):
+        self.series, self.jumps = series, jumps
+        times = series.times
+        near = np.zeros(len(times), dtype=bool)
+        for b in jumps:
+            near |= np.abs(times - b) <= 2.0 * h + series.dt
+        self.breakpoints = tuple(float(x) for x in times[near])
+
+    def __call__(self, t):
+        return self.series(t)
+
+
+def record_edges(series, h: float) -> RecordEdges | None:
+    """RecordEdges of a record that jumps at its start (after t = 0) or end, or None: a record
+    that starts and ends at zero is linear between its samples everywhere, which the nodes that
+    hold them follow exactly."""
+    jumps = record_jumps(series)
+    return RecordEdges(series, jumps, h) if jumps else None
+
+
+def record_jumps(series) -> tuple[float, ...]:
+    """The times a record jumps: its start (after t = 0) and its end, where its first or last
+    sample is not zero."""
+    values = series.values
+    if len(values) == 0:
+        return ()
+    out = []
+    if series.start > 0.0 and values[0] != 0.0:
+        out.append(float(series.start))
+    if values[-1] != 0.0:
+        out.append(float(series.end))
+    return tuple(out)
+
+
+#: a record whose step and start are not a whole number of dt / n for any n up to this is followed
+#: at ceil(dt / step) substeps (its samples then between the nodes, as before)
+MAX_ALIGNMENT = 1000
+
+
+def record_alignment(dt: float, step: float, start: float = 0.0) -> int:
+    """The fewest compute steps per step of dt whose nodes hold every sample of a record of
+    ``step`` starting at ``start``: q with step / dt = p / q and start / dt = a / b in lowest
+    terms, their least common multiple (1 where dt's own nodes do; the seed's 10 ms record at
+    1 ms). A ratio with no such q up to MAX_ALIGNMENT: 1 (the samples fall between nodes)."""
+    from fractions import Fraction
+
+    out = 1
+    for ratio in (step / dt, start / dt):
+        if ratio == 0.0:
+            continue
+        f = Fraction(ratio).limit_denominator(MAX_ALIGNMENT)
+        if abs(float(f) - ratio) > 1e-9 * max(1.0, abs(ratio)):
+            return 1
+        out = math.lcm(out, f.denominator)
+    return out if out <= MAX_ALIGNMENT else 1
+
+
 @dataclass(frozen=True)
 class Excitation:
     """Support acceleration (m/s2) and external generalized forces at G (N, N m)."""
@@ -110,23 +172,33 @@ class Excitation:
         Returns (bounds, nsub): output steps bounds[i] to bounds[i + 1] (step k runs from k dt
         to (k + 1) dt) take nsub[i] compute steps each; a few numbers however long the run.
         """
+        from rbhyst.model.records import Series
+
         spans = []
         for s in self.signals.values():
             need = max(1, math.ceil(dt / s.step - 1e-9))
-            if need == 1:
+            # a record is linear between its samples: the compute nodes must hold every sample
+            # (its step and start a whole number of compute steps), or the load the loop sees is
+            # another, smoother record, an error no estimate of the step's can see
+            align = record_alignment(dt, s.step, s.start) if isinstance(s, Series) else 1
+            if need == 1 and align == 1:
                 continue
             # one step more on either side: the coarse steps next to the span then see none of
             # it (an analytic signal's node values are hat averages, see load_nodes)
             first = max(0, math.floor(s.start / dt) - 1)
             last = n_steps if s.end is None else min(n_steps, math.ceil(s.end / dt) + 1)
             if first < last:
-                spans.append((first, last, need))
+                spans.append((first, last, need, align))
         # (sorted(set()) rather than np.unique, which imports numpy.ma: a command's every millisecond)
-        bounds = np.array(sorted({0, n_steps, *(f for f, _, _ in spans), *(l for _, l, _ in spans)}), dtype=np.int64)
-        nsub = np.ones(len(bounds) - 1, dtype=np.int64)
-        for first, last, need in spans:
+        bounds = np.array(sorted({0, n_steps, *(f for f, *_ in spans), *(l for _, l, *_ in spans)}), dtype=np.int64)
+        need_of = np.ones(len(bounds) - 1, dtype=np.int64)
+        align_of = np.ones(len(bounds) - 1, dtype=np.int64)
+        for first, last, need, align in spans:
             inside = (bounds[:-1] >= first) & (bounds[1:] <= last)
-            nsub[inside] = np.maximum(nsub[inside], need)
+            need_of[inside] = np.maximum(need_of[inside], need)
+            align_of[inside] = np.lcm(align_of[inside], align)
+        # the fewest compute steps that follow every signal and hold every record's samples
+        nsub = align_of * -(-need_of // align_of)
         return bounds, nsub
 
     def support(self, t: np.ndarray, axes=(1, 2)) -> np.ndarray:
@@ -163,13 +235,14 @@ class Excitation:
         values = {}
         for k, s in self.signals.items():
             v = s(t)
-            if not isinstance(s, Series):
+            shape = record_edges(s, h) if isinstance(s, Series) else s
+            if shape is not None:
                 near = np.zeros(len(t), dtype=bool)
-                for b in s.breakpoints:
+                for b in (shape.jumps if isinstance(s, Series) else s.breakpoints):
                     if b > 0.0:  # a signal that starts with the analysis starts at its right limit
                         near |= np.abs(t - b) < h
                 if near.any():
-                    v[near] = signals.hat_average(s, t[near], h)
+                    v[near] = signals.hat_average(shape, t[near], h)
             values[k] = v
         return self._combine(values, len(t), mass)
 

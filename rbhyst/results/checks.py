@@ -21,8 +21,8 @@ def diagnose(result: Result) -> tuple[list[str], list[str]]:
     elif not ex.acts_before(t_end):
         warnings.append(f"no excitation acts within the analysis (0 to {t_end:g} s): every response is zero")
     if st.record_substeps > 1:
-        notes.append(f"the excitation is sampled finer than dt = {s.dt:g} s: {st.record_substeps} substeps per "
-                     "step follow it (output stays on dt)")
+        notes.append(f"the excitation is sampled finer than dt = {s.dt:g} s, or off its steps: "
+                     f"{st.record_substeps} substeps per step follow it (output stays on dt)")
     notes += unresolved_signals(result)
     if st.substeps:
         notes.append(f"{st.substeps} substeps (up to 2^{st.max_substep_level} per step) resolved stiff instants; "

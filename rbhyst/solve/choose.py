@@ -174,7 +174,6 @@ def chosen_run(system: System, settings, keep: bool = True, csv=None, progress=N
         k = k_next
     if result is None:
         result = answer_at(small, sk, exact, keep, csv, rerun=trial, progress=progress, passes=passes)
-    worst, name = worst_of(result.accuracy)
     why = _why(passes, warn, exact, share, where, result)
     result.chosen = {"method": result.settings.integrator,
                      "compute_step_s": compute_step(result), "accuracy_substeps": result.settings.refine,
@@ -183,7 +182,7 @@ def chosen_run(system: System, settings, keep: bool = True, csv=None, progress=N
                      "passes": passes, "why": why,
                      # (every pass's time stepping and estimate: what analysis.wall_s + accuracy.wall_s
                      # are of one run; wall_s the whole choice, its Python and planning included)
-                     "computing_s": sum(p["wall_s"] for p in passes), "wall_s": time.perf_counter() - tic}
+                     "computing_wall_s": sum(p["wall_s"] for p in passes), "wall_s": time.perf_counter() - tic}
     return result
 
 
@@ -277,7 +276,7 @@ def _why(passes, warn: float, exact: bool, share: float, where: str, result) -> 
     elif first["estimated_error"] is not None:
         parts.append(f"at the deck's dt the estimated error was {first['estimated_error']:.3g} in {first['column']} "
                      f"(above warn_error = {warn:g}); "
-                     + (f"the adaptive integration meets it" if result.settings.integrator == "adaptive" else
+                     + ("the adaptive integration meets it" if result.settings.integrator == "adaptive" else
                         f"a compute step of {compute_step(result):.3g} s gives {worst:.3g}"))
     else:
         parts.append(f"the error could not be estimated ({first['status']}): the deck's dt as given")

@@ -281,10 +281,13 @@ def source_and_offset(method: str, a: np.ndarray, v: np.ndarray, t: np.ndarray, 
 
 
 def signal_corners(system) -> list[float]:
-    """The times of every analytic signal's start, end and corners (no source within 1.5 h of one)."""
+    """The times of every analytic signal's start, end and corners, and where a record jumps (its
+    start or end off zero): no source within 1.5 h of one."""
     from rbhyst.model.records import Series
+    from rbhyst.model.system import record_jumps
 
-    return [b for sig in system.excitation.signals.values() if not isinstance(sig, Series) for b in sig.breakpoints]
+    return [b for sig in system.excitation.signals.values()
+            for b in (record_jumps(sig) if isinstance(sig, Series) else sig.breakpoints)]
 
 
 def source_from_run(plan, tap: RunTap):
