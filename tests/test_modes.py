@@ -20,7 +20,7 @@ from rbhyst.model.coordinates import rotation, translation
 from rbhyst.model.hysteresis import parameter_set
 from rbhyst.model.system import Element, Excitation, System
 from rbhyst.solve.modes import AT_REST, INITIAL, initial_modes, modes_of
-from conftest import DECKS, linear_set, write_deck
+from conftest import DECKS, invoke, linear_set, write_deck
 
 runner = CliRunner()
 
@@ -345,3 +345,25 @@ def test_the_run_prints_the_modes(tmp_path):
     assert summary["modes"]["frequencies_hz"] == pytest.approx(scipy_modes(*plate_by_hand())[0], rel=1e-9)
     for key in ("body", "elements", "analysis", "energy", "peaks", "extremes", "notes", "warnings"):
         assert key in summary  # the keys users script against stay
+
+
+@pytest.mark.parametrize("deck", sorted(p.name for p in DECKS.glob("*.toml")))
+@pytest.mark.parametrize("kinematics", [None, "small", "exact"])
+def test_modes_of_every_sample_deck_with_either_kinematics(tmp_path, deck, kinematics):
+    """`rbhyst modes` on every sample deck with a body exits 0, whatever its kinematics (exact
+    ones in space once ended in a traceback from the excitation's point, which modes never read);
+    a deck of loops alone (no body) is told so, exit 2."""
+    import tomllib
+
+    data = tomllib.loads((DECKS / deck).read_text())
+    if kinematics is not None and "analysis" in data:
+        data["analysis"]["kinematics"] = kinematics
+    for section in data.get("excitation", {}).values():  # (the records beside the sample decks)
+        for sig in section.values():
+            if isinstance(sig, dict) and "file" in sig:
+                sig["file"] = str(DECKS / sig["file"])
+    code, err = invoke("modes", write_deck(tmp_path, data))
+    if "body" not in data:
+        assert code == 2 and err.startswith("error: body: required"), err
+        return
+    assert code == 0, err

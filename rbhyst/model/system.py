@@ -1027,7 +1027,7 @@ def assemble_space(deck: dk.Deck, base: Path, run: bool = True) -> System:
     if free:
         raise InputError(f"elements: the body is not restrained against {'; '.join(free)}")
     excitation = _excitation_space(deck, base, body, frame, notes) if run else Excitation(
-        directions=load_directions(SPACE), constant=(0.0,) * 6)
+        directions=load_directions(SPACE), constant=(0.0,) * 6, point=(0.0, 0.0, 0.0))  # (the modes' alone)
     dampers = []
     for dp in deck.dampers or []:
         x = _placed_space(body, dp)
