@@ -58,7 +58,7 @@ def run(deck: Deck | str | Path, integrator: str | None = None, dt: float | None
     from rbhyst.results.writers import CsvWriter
 
     planned = plan(system, settings)  # what can fail before a file is touched
-    early = planned.check_size(keep=False, folder=Path(out))
+    early = planned.check_size(keep=False, folder=Path(out)) + replaced_results(Path(out), as_run)
     for note in early if monitor is not None else ():
         monitor.note(note)
     draw = d.output.plots if plots is None else plots
@@ -79,6 +79,23 @@ def run(deck: Deck | str | Path, integrator: str | None = None, dt: float | None
     result.writer = write
     issue(result.warnings)
     return result
+
+
+def replaced_results(folder: Path, as_run: dict) -> list[str]:
+    """A note where ``folder`` holds the results of another deck, which the run replaces (the
+    summary.json rbhyst wrote there, its deck's title other than this one's: a deck edited and
+    run again replaces its own results, as it is meant to)."""
+    import json
+
+    try:
+        before = json.loads((folder / "summary.json").read_text())
+    except (OSError, ValueError):
+        return []
+    deck = before.get("deck") if isinstance(before, dict) else None
+    if not isinstance(deck, dict) or deck.get("title") == as_run.get("title"):
+        return []
+    old = deck.get("title") or "(untitled)"
+    return [f"{folder}: replaces the results of another deck, {old!r}, that were there"]
 
 
 def modes(deck: Deck | str | Path) -> dict:

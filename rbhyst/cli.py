@@ -144,6 +144,30 @@ def modes(
         typer.echo(line)
 
 
+def _sweep_request(d, direction, amplitude, units, frequencies, f_from, f_to, count):
+    """transmissibility's (amplitudes, frequencies), or an InputError with every problem of the
+    command line at once: each option's, then the request's (in the units given)."""
+    from rbhyst.analyses.transmissibility import directions, frequency_list, request_problems
+
+    problems, amplitudes, freqs = [], [], []
+    try:
+        amplitudes = _split_list(amplitude, "--amplitude", float)
+    except InputError as err:
+        problems += err.problems
+    try:
+        freqs = frequency_list(_split_list(frequencies, "--frequencies", float), f_from, f_to, count)
+    except InputError as err:
+        problems += err.problems
+    said = {p.split(":")[0] for p in problems}  # (what failed above is said once)
+    problems += [p for p in request_problems(direction, amplitudes or [1.0], freqs or [1.0], directions(d))
+                 if p.split(":")[0] not in said]
+    if units not in ("g", "m/s2"):
+        problems.append(f"--units: {units!r}: g or m/s2")
+    if problems:
+        raise InputError(problems)
+    return amplitudes, freqs
+
+
 def run_line(result) -> str:
     """The console's one line on a run: method, steps, time, peak displacements and accelerations."""
     from rbhyst.model.deck import ACCEL_UNITS
@@ -632,18 +656,11 @@ def transmissibility(
 
     from rbhyst.model.deck import ACCEL_UNITS, load_deck
     from rbhyst.files.outdir import staged_directory
-    from rbhyst.analyses.transmissibility import (directions, frequency_list, request_problems, stepped_sine, write_csv,
-                                                  write_json)
+    from rbhyst.analyses.transmissibility import stepped_sine, write_csv, write_json
 
     with user_errors():
         d = load_deck(deck)
-        amplitudes = _split_list(amplitude, "--amplitude", float)
-        freqs = frequency_list(_split_list(frequencies, "--frequencies", float), f_from, f_to, count)
-        problems = request_problems(direction, amplitudes, freqs, directions(d))  # (in the units given)
-        if units not in ("g", "m/s2"):
-            problems.append(f"--units: {units!r}: g or m/s2")
-        if problems:
-            raise InputError(problems)
+        amplitudes, freqs = _sweep_request(d, direction, amplitude, units, frequencies, f_from, f_to, count)
         amplitudes = [a * ACCEL_UNITS[units] for a in amplitudes]
         console = Console(stderr=True)
         columns = (TextColumn("{task.description:<32}"), BarColumn(), TextColumn("{task.completed}/{task.total}"),

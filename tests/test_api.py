@@ -76,7 +76,7 @@ def test_with_values_changes_a_deck_by_dotted_keys(deck_path):
 
 @pytest.mark.parametrize("values, message", [
     ({"hysteresis.wri_shaer.loading.kb": 1.0}, "hysteresis.wri_shaer.loading.kb: no hysteresis.wri_shaer in the deck"),
-    ({"body.mass": -5.0}, "body.mass: Input should be greater than 0"),
+    ({"body.mass": -5.0}, "body.mass: must be greater than 0"),
     ({"body.colour": "red"}, "body.colour: unknown key"),
     ({"elements[9].count": 2}, "elements[9].count: no elements[9] in the deck"),
     ({"analysis..dt": 1.0}, "analysis..dt: cannot read the key"),

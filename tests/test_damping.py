@@ -86,7 +86,7 @@ def test_every_integrator_carries_it(tmp_path, integrator):
     ({"ratio": 0.05}, "damping.rayleigh: give exactly one of `frequencies_hz`"),
     ({"ratio": 0.05, "modes": [1, 3], "frequencies_hz": [1.0, 2.0]}, "damping.rayleigh: give exactly one of"),
     ({"ratio": 0.05, "modes": [2, 2]}, "damping.rayleigh.modes: [2, 2]: two different modes"),
-    ({"ratio": 0.05, "modes": [1, 4]}, "damping.rayleigh.modes[2]: Input should be less than or equal to 3"),
+    ({"ratio": 0.05, "modes": [1, 4]}, "damping.rayleigh.modes[2]: must be less than or equal to 3"),
     ({"ratio": 1.5, "modes": [1, 3]}, "damping.rayleigh.ratio"),
     ({"ratio": [0.2, 0.001], "frequencies_hz": [1.0, 2.0]}, "damping.rayleigh.ratio: [0.2, 0.001] at [1.0, 2.0] Hz"),
     ({"ratio": 0.05, "frequencies_hz": [1.0, 2.0], "kind": "x"}, "damping.rayleigh.kind: unknown key"),

@@ -187,7 +187,7 @@ def test_bad_strokes_and_dampers_get_one_line(tmp_path):
         rbhyst.load_deck(write_deck(tmp_path, data))
     assert err.value.problems == [
         "elements[1].stroke: [0.01, 0.05] must be [lower, upper] with lower < 0 < upper (m)",
-        "dampers[2].c: Input should be greater than or equal to 0",  # (0 is a no-damper baseline)
+        "dampers[2].c: must be greater than or equal to 0",  # (0 is a no-damper baseline)
     ]
     data["elements"][0]["stroke"] = [-0.01, 0.05]
     data["dampers"][1]["c"] = 1.0

@@ -275,7 +275,7 @@ def plane_deck(**iso) -> dict:
      "isolators[1].point: List should have at least 3 items: the deck is in space (3-D), as its body's first "
      "vertex (or box) says, and every point in it has 3 coordinates"),
     (space_deck(direction=[0.0, 0.0, -1.0]), "isolators[1].direction: unknown key"),
-    (space_deck(count=0), "isolators[1].count: Input should be greater than or equal to 1"),
+    (space_deck(count=0), "isolators[1].count: must be greater than or equal to 1"),
     (plane_deck(axial=[1.0, 0.0]),
      "isolators[1].axial: the deck is in the plane (2-D): give the axial line as axial_deg from x1 (counterclockwise)"),
     (plane_deck(shear_deg=80.0),

@@ -112,3 +112,93 @@ def test_a_mass_too_small_to_divide_by_is_one_line(tmp_path, mass):
     assert code == 2, err
     [line] = err.strip().splitlines()
     assert line.startswith("error: body.mass: the body's mass matrix has entries ") and "too small to divide by" in line
+
+
+# ------------------------------------------------------------------ in the user's words
+
+PYDANTIC_WORDS = ("constrained-", "Input should be", "literal_error", "function-after", "function-before",
+                  "valid list", "valid dictionary", "tagged-union")
+
+
+def run_error(tmp_path, data) -> list[str]:
+    out = tmp_path / "o"
+    code, err = invoke("run", write_deck(tmp_path, data), "--out", out, "--no-plots")
+    assert code == 2 and not out.exists(), err
+    lines = err.splitlines()
+    assert all(line.startswith("error: ") for line in lines) and not any(w in err for w in PYDANTIC_WORDS), err
+    return lines
+
+
+@pytest.mark.parametrize("where, value, line", [
+    (("damping",), {"rayleigh": {"ratio": 1.5, "modes": [1, 2]}}, "error: damping.rayleigh.ratio: must be less than 1"),
+    (("analysis", "kinematics"), "big", "error: analysis.kinematics: must be 'auto', 'small' or 'exact'"),
+    (("analysis", "dt"), "abc", "error: analysis.dt: must be a valid number"),
+    (("body", "mass"), -1.0, "error: body.mass: must be greater than 0"),
+])
+def test_a_wrong_value_is_said_in_rbhyst_s_words(tmp_path, where, value, line):
+    data = seed_deck(duration=0.2)
+    target = data
+    for key in where[:-1]:
+        target = target[key]
+    target[where[-1]] = value
+    assert run_error(tmp_path, data) == [line]
+
+
+def test_a_record_and_a_signal_at_once_are_said_to_be_both(tmp_path):
+    data = seed_deck(duration=0.2)
+    data["excitation"]["support"]["x1"]["file"] = "x1.csv"
+    assert run_error(tmp_path, data) == [
+        "error: excitation.support.x1: both a record (`file`) and a signal (`type`): give one; a record takes no `type`"]
+
+
+def test_a_byte_order_mark_is_accepted_in_decks_and_records(tmp_path):
+    """Windows Notepad saves UTF-8 with a byte-order mark: it is not text, and rbhyst reads past it."""
+    (tmp_path / "rec.csv").write_text("time_s,acc_g\n0.0,0.0\n0.01,0.05\n0.02,-0.03\n0.03,0.0\n", encoding="utf-8-sig")
+    data = seed_deck(duration=0.1)
+    data["excitation"]["support"] = {"x1": {"file": "rec.csv", "units": "g"}}
+    path = write_deck(tmp_path, data)
+    path.write_text(path.read_text(), encoding="utf-8-sig")
+    assert path.read_bytes().startswith(b"\xef\xbb\xbf")
+    code, err = invoke("run", path, "--out", tmp_path / "o", "--no-plots")
+    assert code == 0, err
+
+
+def test_a_spreadsheet_export_with_decimal_commas_is_named(tmp_path):
+    (tmp_path / "rec.csv").write_text("time_s;acc_g\n0,00;0,01\n0,01;0,02\n0,02;-0,015\n")
+    data = seed_deck(duration=0.1)
+    data["excitation"]["support"] = {"x1": {"file": "rec.csv", "units": "g"}}
+    [line] = run_error(tmp_path, data)
+    assert "rec.csv:2: '0,00;0,01' looks like a spreadsheet's export with decimal commas" in line
+    assert "export it with '.' as the decimal separator" in line
+
+
+def test_every_command_line_problem_is_said_at_once(tmp_path):
+    code, err = invoke("transmissibility", write_deck(tmp_path, seed_deck()), "--direction", "x3",
+                       "--amplitude", "0.2,abc", "--units", "gg")
+    assert code == 2
+    assert err.splitlines() == [
+        "error: --amplitude: 'abc' is not a number",
+        "error: frequencies: --frequencies, or --from, --to and --count (--from, --to, --count missing)",
+        "error: --direction: 'x3': x1 or x2 (x3, the vertical, for a deck in space)",
+        "error: --units: 'gg': g or m/s2"]
+
+
+def test_a_record_that_starts_late_is_noted(tmp_path):
+    (tmp_path / "late.csv").write_text("time_s,acc_g\n5.0,0.0\n5.01,0.02\n5.02,-0.015\n5.03,0.0\n")
+    data = seed_deck(duration=5.1)
+    data["excitation"]["support"] = {"x1": {"file": "late.csv", "units": "g"}}
+    res = rbhyst.run(write_deck(tmp_path, data), estimate=False)
+    assert any(n.startswith("excitation.support.x1: late.csv: its time column starts at 5 s: the support is at rest")
+               for n in res.notes)
+
+
+def test_another_deck_s_results_replaced_are_said(tmp_path):
+    out = tmp_path / "o"
+    first, second = seed_deck(duration=0.1), seed_deck(duration=0.1)
+    second["title"] = "cabinet B"
+    assert invoke("run", write_deck(tmp_path, first, "a"), "--out", out, "--no-plots")[0] == 0
+    code, err = invoke("run", write_deck(tmp_path, second, "b"), "--out", out, "--no-plots")
+    assert code == 0 and f"note: {out}: replaces the results of another deck, 'seed scene', that were there" in err
+    second["analysis"]["dt"] = 5e-4  # the same deck, edited: its own results, replaced as meant
+    code, err = invoke("run", write_deck(tmp_path, second, "b"), "--out", out, "--no-plots")
+    assert code == 0 and "replaces the results" not in err

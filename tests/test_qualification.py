@@ -497,7 +497,7 @@ def test_qualify_against_ieee693_from_the_deck_and_the_command_line(tmp_path):
         "0 at grade to 1 at the roof)"]
     for bad, lines in (
             ({"standard": "ieee693", "level": "extreme"},
-             ["error: qualify.level: Input should be 'high' or 'moderate'"]),
+             ["error: qualify.level: must be 'high' or 'moderate'"]),
             ({"standard": "ieee693", "sds": 1.0, "rrs_damping": 0.5},
              ["error: qualify.level: required with the IEEE 693 spectrum: high or moderate (its performance level)",
               "error: qualify.rrs_damping: 0.5: IEEE 693's damping factor is used from 0.005 to 0.2 (0.05 by default, "

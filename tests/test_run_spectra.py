@@ -173,7 +173,7 @@ def test_spectrum_mistakes_one_line_each(tmp_path, args, lines):
 @pytest.mark.parametrize("spectra, lines", [
     ({"damping": [0.05, 0.05]}, ["output.spectra.damping: [0.05, 0.05]: each damping once"]),
     ({"damping": 1.0, "periods_s": [0.1, -1.0]},
-     ["output.spectra.damping[1]: Input should be less than 1", "output.spectra.periods_s[2]: Input should be "
+     ["output.spectra.damping[1]: must be less than 1", "output.spectra.periods_s[2]: must be "
                                                                  "greater than 0"]),
     ({"periods_s": [0.1, 0.1], "dampings": 0.1},
      ["output.spectra.periods_s: each period once", "output.spectra.dampings: unknown key"]),

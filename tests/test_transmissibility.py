@@ -58,7 +58,7 @@ def test_a_ramped_sine_rises_smoothly_then_is_the_sine():
     h = 1e-3
     assert ramp_envelope(h) == pytest.approx(4 * np.pi**2 * h**3 / 6, rel=1e-4)
     assert 1 - ramp_envelope(1 - h) == pytest.approx(4 * np.pi**2 * h**3 / 6, rel=1e-4)
-    with pytest.raises(InputError, match=r"ramp_cycles: Input should be greater than or equal to 0"):
+    with pytest.raises(InputError, match=r"ramp_cycles: must be greater than or equal to 0"):
         d = square_linear_deck()
         d["excitation"] = {"support": {"x1": {"type": "sine", "amplitude": 1.0, "frequency_hz": 2.0, "units": "g",
                                               "ramp_cycles": -1.0}}}

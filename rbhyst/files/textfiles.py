@@ -7,8 +7,9 @@ from pathlib import Path
 from rbhyst.errors import InputError
 
 
-def read_text(path: Path, encoding: str = "utf-8") -> str:
-    """The file's text; a missing, unreadable or binary file is an InputError naming it."""
+def read_text(path: Path, encoding: str = "utf-8-sig") -> str:
+    """The file's text; a missing, unreadable or binary file is an InputError naming it. UTF-8
+    with or without a byte-order mark (Windows Notepad writes one): the mark is not text."""
     try:
         return Path(path).read_text(encoding=encoding)
     except FileNotFoundError:

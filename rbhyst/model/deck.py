@@ -177,7 +177,7 @@ class Body(_Model):
         symmetric positive definite is rbhyst.model.solid's to say, with its numbers)."""
         if _number(v):
             if not (v > 0 and np.isfinite(v)):
-                raise ValueError("Input should be greater than 0")
+                raise ValueError("must be greater than 0")
             return float(v)
         if (isinstance(v, list) and len(v) == 3 and all(isinstance(r, list) and len(r) == 3 for r in v)
                 and all(_number(x) and np.isfinite(x) for r in v for x in r)):
@@ -1000,7 +1000,7 @@ def dimension_problems(deck: Deck) -> list[str]:
                             "the mass centre's plots, the ground's spectra): choose another")
     rayleigh = deck.damping.rayleigh if deck.damping is not None else None
     if n == 2 and rayleigh is not None and rayleigh.modes is not None:
-        problems += [f"damping.rayleigh.modes[{i}]: Input should be less than or equal to 3"
+        problems += [f"damping.rayleigh.modes[{i}]: must be less than or equal to 3"
                      for i, m in enumerate(rayleigh.modes, start=1) if m > 3]
     return problems
 
@@ -1097,6 +1097,8 @@ def _format_loc(loc: tuple) -> str:
             out += f"[{part + 1}]"
         elif part in ("record", "sine", "pulse", "random") or str(part).startswith(("Record[", "Sine[", "Pulse[")):
             continue  # the union's tag is noise to a user
+        elif str(part) in PYDANTIC_TYPES or "[" in str(part):
+            continue  # (a union member's type name: constrained-float, list[float], function-after[...])
         elif re.fullmatch(r"[A-Za-z0-9_\-]+", str(part)):
             out += ("." if out else "") + str(part)
         else:  # a key with spaces or control characters: quoted, so the message stays one line
@@ -1104,12 +1106,33 @@ def _format_loc(loc: tuple) -> str:
     return out or "(deck)"
 
 
+#: the names pydantic gives the members of a union in an error's location: none is a deck key
+PYDANTIC_TYPES = frozenset({"constrained-float", "constrained-int", "constrained-str", "float", "int", "str", "bool",
+                            "list", "dict", "none", "tagged-union", "union", "literal", "is-instance", "any"})
+
+
 def _messages(err: ValidationError) -> list[str]:
     lines = []
-    for e in err.errors():
+    errors = err.errors()
+    # a value that fails every member of a union (a ratio or a list of them) is said once, by the
+    # member whose rule it broke, not by those whose type it does not have ("must be a valid list")
+    by_place: dict[str, list[str]] = {}
+    for e in errors:
+        by_place.setdefault(_format_loc(e["loc"]), []).append(e["type"])
+    errors = [e for e in errors if not (e["type"].endswith("_type")
+                                        and any(not t.endswith("_type") for t in by_place[_format_loc(e["loc"])]))]
+    for e in errors:
         msg = e["msg"]
         if msg.startswith("Value error, "):
             msg = msg[len("Value error, "):]
+        # pydantic's wording as the deck's other messages word it
+        msg = re.sub(r"^Input should be ", "must be ", msg)
+        msg = msg.replace("a valid number, unable to parse string as a number", "a number")
+        if e["type"] == "extra_forbidden" and e["loc"][-1] == "file" and any(
+                t in e["loc"] for t in ("sine", "pulse", "random")):
+            lines.append(f"{_format_loc(e['loc'][:-1])}: both a record (`file`) and a signal (`type`): give one; "
+                         "a record takes no `type`")
+            continue
         if e["type"] == "extra_forbidden":
             msg = "unknown key"
         elif e["type"] == "missing":

@@ -131,6 +131,12 @@ def read_table(path: Path, dt: float | None = None) -> RecordFile:
         declared, _, _ = _column_units(path, first, header, ncol)
         return RecordFile(Series(0.0, dt, data[:, 0]), declared)
     if ncol != 2:
+        comma = next((k for k, line in enumerate(lines) if re.fullmatch(r"\s*-?\d+,\d+(\s*;\s*-?\d+,\d+(e[-+]?\d+)?)+\s*",
+                                                                        line, re.IGNORECASE)), None)
+        if comma is not None:
+            raise InputError(f"{path}:{comma + 1}: {lines[comma].strip()!r} looks like a spreadsheet's export with decimal "
+                             "commas and semicolons between columns: rbhyst reads decimal points; export it with '.' "
+                             "as the decimal separator")
         raise InputError(f"{path}: expected one column (with dt) or two (time, value), found {ncol}")
     if dt is not None:
         raise InputError(f"{path}: has a time column; leave `dt` out of the deck")

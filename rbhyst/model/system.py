@@ -672,6 +672,10 @@ def _signal(spec, scale_units: dict[str, float], base: Path,
     record = read_record(path, spec.dt)
     check_declared(record.declared, spec.units)  # the file's own word on its units must agree
     notes.extend(record.notes)
+    if record.series.t0 > 0.0:
+        notes.append(f"{path.name}: its time column starts at {record.series.t0:g} s: the support is at rest (zero "
+                     f"acceleration) before it, as the analysis starts at 0 s with every signal; shift the "
+                     f"file's times if it should start at 0")
     series = Series(record.series.t0, record.series.dt, record.series.values * factor * spec.scale)
     return series, series.duration
 

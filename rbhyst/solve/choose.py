@@ -132,11 +132,8 @@ def chosen_run(system: System, settings, keep: bool = True, csv=None, progress=N
                               screen=not last)
         if trial and s.kinematics == "auto":
             exact, share, where = needs_exact(small, s)
-        worst, name = worst_of(small.accuracy)
-        status = small.accuracy["status"] if small.accuracy else "not estimated"
-        passes.append({"integrator": sk.integrator, "compute_step_s": compute_step(small), "kinematics": "small",
-                       "refine": k, "estimated_error": None if math.isinf(worst) else worst, "column": name, "status": status,
-                       "wall_s": small.stats.wall_s + (small.accuracy or {}).get("wall_s", 0.0)})
+        passes.append(pass_entry(small, "small"))
+        worst, status = worst_of(small.accuracy)[0], passes[-1]["status"]
         done = status in ("sensitive", "unavailable", "not estimated") or worst <= warn or last
         if done:
             break
@@ -152,11 +149,10 @@ def chosen_run(system: System, settings, keep: bool = True, csv=None, progress=N
                 # stiffness monitor split it around the reversals): on at the method's order
                 small = estimated_run(system, sk, keep=keep if not exact else False,
                                       csv=None if exact else csv, progress=progress, spare_core=spare_core)
-                worst, name = worst_of(small.accuracy)
-                status = small.accuracy["status"] if small.accuracy else "not estimated"
-                passes[-1].update(estimated_error=None if math.isinf(worst) else worst, column=name, status=status,
-                                  wall_s=passes[-1]["wall_s"] + small.stats.wall_s
-                                  + (small.accuracy or {}).get("wall_s", 0.0))
+                screened = passes.pop()
+                passes.append(pass_entry(small, "small"))
+                passes[-1]["wall_s"] += screened["wall_s"]
+                worst, status = worst_of(small.accuracy)[0], passes[-1]["status"]
                 trial = False
                 if status != "estimated" or worst <= warn:
                     break
@@ -174,22 +170,8 @@ def chosen_run(system: System, settings, keep: bool = True, csv=None, progress=N
         k = k_next
     if result is None:
         result = answer_at(small, sk, exact, keep, csv, rerun=trial, progress=progress, passes=passes)
-        while (exact and "transfer_gap" not in (result.accuracy or {}) and len(passes) < MAX_PASSES + 1
-               and (result.accuracy or {}).get("status") == "estimated" and worst_of(result.accuracy)[0] > warn):
-            # the exact run estimated by its own adaptive solutions, above warn_error: finer still
-            from rbhyst.model.kinematics import exact_twin
-
-            k = refinement(k, worst_of(result.accuracy)[0], AIM * warn, order)
-            sk = dataclasses.replace(s, refine=k, choose=False)
-            kinematics = result.kinematics
-            result = estimated_run(exact_twin(small.system), sk, keep=keep, csv=csv, progress=progress,
-                                   spare_core=spare_core)
-            result.kinematics = kinematics
-            worst, name = worst_of(result.accuracy)
-            passes.append({"integrator": sk.integrator, "compute_step_s": compute_step(result), "refine": k,
-                           "kinematics": "exact", "estimated_error": worst, "column": name,
-                           "status": result.accuracy["status"],
-                           "wall_s": result.stats.wall_s + result.accuracy.get("wall_s", 0.0)})
+        if exact:
+            result = _exact_finer(result, small, s, k, order, passes, keep, csv, progress, spare_core)
     why = _why(passes, warn, exact, share, where, result)
     result.chosen = {"method": result.settings.integrator,
                      "compute_step_s": compute_step(result), "accuracy_substeps": result.settings.refine,
@@ -199,6 +181,33 @@ def chosen_run(system: System, settings, keep: bool = True, csv=None, progress=N
                      # (every pass's time stepping and estimate: what analysis.wall_s + accuracy.wall_s
                      # are of one run; wall_s the whole choice, its Python and planning included)
                      "computing_wall_s": sum(p["wall_s"] for p in passes), "wall_s": time.perf_counter() - tic}
+    return result
+
+
+def pass_entry(run: Result, kinematics: str) -> dict:
+    """analysis.chosen's entry of one pass: its method, step, kinematics, estimate and cost."""
+    worst, name = worst_of(run.accuracy)
+    return {"integrator": run.settings.integrator, "compute_step_s": compute_step(run), "kinematics": kinematics,
+            "refine": run.settings.refine, "estimated_error": None if math.isinf(worst) else worst, "column": name,
+            "status": run.accuracy["status"] if run.accuracy else "not estimated",
+            "wall_s": run.stats.wall_s + (run.accuracy or {}).get("wall_s", 0.0)}
+
+
+def _exact_finer(result: Result, small: Result, s, k: int, order: float, passes: list, keep, csv, progress,
+                 spare_core) -> Result:
+    """The exact answer refined while its own estimate (the adaptive solutions': no companion for
+    exact rows) exceeds warn_error, as the small-rotation passes are (at most MAX_PASSES more)."""
+    from rbhyst.model.kinematics import exact_twin
+
+    warn = s.warn_error
+    while ("transfer_gap" not in (result.accuracy or {}) and len(passes) < MAX_PASSES + 1
+           and (result.accuracy or {}).get("status") == "estimated" and worst_of(result.accuracy)[0] > warn):
+        k = refinement(k, worst_of(result.accuracy)[0], AIM * warn, order)
+        kinematics = result.kinematics
+        result = estimated_run(exact_twin(small.system), dataclasses.replace(s, refine=k, choose=False), keep=keep,
+                               csv=csv, progress=progress, spare_core=spare_core)
+        result.kinematics = kinematics
+        passes.append(pass_entry(result, "exact"))
     return result
 
 

@@ -53,7 +53,11 @@ def output_steps(system: System, s: Settings) -> int:
         raise InputError("analysis.duration: required when no record or finite pulse gives it")
     if s.dt > duration:
         raise InputError(f"analysis.dt: {s.dt} s is larger than the duration {duration} s")
-    return max(1, math.ceil(duration / s.dt - 1e-9))
+    steps = duration / s.dt
+    if steps > MAX_COMPUTE_STEPS:  # (before any array of them: numbers past int64 overflow)
+        raise InputError(f"analysis.duration, analysis.dt: {steps:.3g} steps of {s.dt:g} s ({duration:.4g} s) is "
+                         f"beyond any analysis (more than {MAX_COMPUTE_STEPS:.0e} steps): shorten analysis.duration")
+    return max(1, math.ceil(steps - 1e-9))
 
 
 def compute_times(bounds: np.ndarray, substeps: np.ndarray, dt: float) -> np.ndarray:
