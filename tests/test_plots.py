@@ -486,3 +486,25 @@ def test_an_element_at_rest_gets_no_panel_of_rounding_noise(tmp_path):
     said = [" ".join(t.get_text() for t in ax.texts) for ax in axes]
     assert drawn == [True, True, False, False]
     assert all(s.startswith("at rest: |f| at most ") for s in said[2:])
+
+
+def test_a_response_of_rounding_is_said_to_be_at_rest(tmp_path):
+    """A symmetric square shaken along x1: theta3 and u2 stay at rounding (1e-18 m, 1e-39 rad);
+    their panels say so rather than draw the noise as a response, and keep the run's time axis;
+    u1's is drawn."""
+    import rbhyst
+    from conftest import square_linear_deck, write_deck
+    from rbhyst.report.run import plot_response
+
+    data = square_linear_deck()
+    data["excitation"] = {"support": {"x1": {"type": "sine", "amplitude": 0.2, "frequency_hz": 2.0, "units": "g",
+                                             "cycles": 3}}}
+    data["analysis"] = {"dt": 0.002, "duration": 2.0}
+    res = rbhyst.run(write_deck(tmp_path, data), estimate=False)
+    for k, drawn in ((0, True), (1, False), (2, False)):
+        fig = plot_response(res, k, tmp_path / f"r{k}.png")
+        for ax in fig.axes:
+            visible = [line for line in ax.lines if line.get_alpha() != 0.0]
+            said = " ".join(t.get_text() for t in ax.texts)
+            assert bool(visible) == drawn and said.startswith("at rest: ") != drawn, (k, said)
+            assert ax.get_xlim()[1] >= 1.9  # (the run's 2 s, not matplotlib's empty 0-1)

@@ -127,10 +127,47 @@ def plot_body(result: Result, path: Path):
     return fig
 
 
-def _line(ax, result: Result, name: str, **kw) -> None:
-    """One column against time, drawn through every bucket's extremes: no peak is lost."""
+def _line(ax, result: Result, name: str, scale: float | None = None, unit: str = "", **kw) -> None:
+    """One column against time, drawn through every bucket's extremes: no peak is lost. Where its
+    peak stays below NEGLIGIBLE of ``scale`` (its family's largest, in the column's own unit) the
+    panel says it is at rest instead: a symmetric body's cross response is rounding (1e-17 rad),
+    which a line would show as a response."""
+    peak = result.extremes.peak(name)
     t, y = result.plot.series(result.columns.index(name))
+    if scale is not None and peak < NEGLIGIBLE * scale:
+        said = "exactly zero" if peak == 0.0 else f"at most {peak:.1e} {unit}, below 1e-9 of the largest: rounding"
+        at_rest(ax, f"at rest: {said}", time_axis=True)
+        ax.plot(t[:1], y[:1] * 0.0, alpha=0.0)  # (the run's time span for the shared axis, drawn by none)
+        ax.plot(t[-1:], y[-1:] * 0.0, alpha=0.0)
+        return
     ax.plot(t, y, **kw)
+
+
+def at_rest(ax, text: str, time_axis: bool = False) -> None:
+    """A panel that shows no line: what it would have drawn, said. ``time_axis``: the panel shares
+    its time axis with the figure's others (its ticks are theirs: kept)."""
+    ax.text(0.5, 0.5, text, ha="center", va="center", fontsize=7.5, color="0.35", transform=ax.transAxes)
+    ax.set_yticks([])
+    if not time_axis:
+        ax.set_xticks([])
+    for side, spine in ax.spines.items():
+        spine.set_visible(time_axis and side == "bottom")
+
+
+def family_scale(result: Result, columns: list[str], rotations: list[bool]) -> dict[str, float]:
+    """Each column's family's largest peak in the column's own unit: translations with
+    translations, a rotation counted at the body's radius of gyration (sqrt(J / m))."""
+    system = result.system
+    masses = np.asarray(system.mass, dtype=float)
+    frame = getattr(system, "frame", None)
+    if frame is not None:
+        masses = np.einsum("ij,j,ij->i", frame, system.mass, frame)
+    m = next((masses[j] for j, c in enumerate(system.coordinates) if not c.rotation), 1.0)
+    spin = [masses[j] for j, c in enumerate(system.coordinates) if c.rotation]
+    rg = math.sqrt(max(spin) / m) if spin else 1.0
+    length = [rg if r else 1.0 for r in rotations]
+    top = max(result.extremes.peak(c) * f for c, f in zip(columns, length))
+    return {c: top / f for c, f in zip(columns, length)}
 
 
 @styled
@@ -172,16 +209,22 @@ def response_files(coordinates) -> list[str]:
 
 @styled
 def plot_response(result: Result, k: int, path: Path) -> None:
-    """Relative displacement and total acceleration of coordinate k (seed Figs. 6-8)."""
-    d, at, d_label, at_label, name = response_rows(result.system.coordinates)[k]
+    """Relative displacement and total acceleration of coordinate k (seed Figs. 6-8), a panel of
+    rounding said to be at rest. Returns the figure (saved to ``path``)."""
+    rows = response_rows(result.system.coordinates)
+    d, at, d_label, at_label, name = rows[k]
+    spins = [c.rotation for c in result.system.coordinates]
+    d_scale = family_scale(result, [r[0] for r in rows], spins)[d]
+    at_scale = family_scale(result, [r[1] for r in rows], spins)[at]
     fig, axes = subplots(2, 1, figsize=(8, 4.5), sharex=True)
-    _line(axes[0], result, d, lw=0.8, color="C0")
+    _line(axes[0], result, d, d_scale, d_label.split("[")[1].rstrip("]"), lw=0.8, color="C0")
     axes[0].set_ylabel(d_label)
     axes[0].set_title(f"Relative displacement and total acceleration: {name}")
-    _line(axes[1], result, at, lw=0.6, color="C1")
+    _line(axes[1], result, at, at_scale, at_label.split("[")[1].rstrip("]"), lw=0.6, color="C1")
     axes[1].set_ylabel(at_label)
     axes[1].set_xlabel("time [s]")
     save(fig, path, TIME_MARGINS)
+    return fig
 
 
 @styled
@@ -193,8 +236,10 @@ def plot_point(result: Result, name: str, path: Path) -> None:
     rows = ([(f"{name}_u{k}_m", f"u{k} [m]", "C0") for k in axes_of]
             + [(f"{name}_at{k}_m_s2", f"at{k} [m/s²]", "C1") for k in axes_of])
     fig, axes = subplots(len(rows), 1, figsize=(8, 1.75 * len(rows)), sharex=True)
+    tops = {kind: max(result.extremes.peak(c) for c, _, _ in rows if f"_{kind}" in c) for kind in ("u", "at")}
     for ax, (column, label, colour) in zip(axes, rows):
-        _line(ax, result, column, lw=0.7, color=colour)
+        _line(ax, result, column, tops["at" if "_at" in column else "u"], label.split("[")[1].rstrip("]"),
+              lw=0.7, color=colour)
         ax.set_ylabel(label)
     axes[0].set_title(f"Relative displacement and total acceleration: point {name} "
                       f"({', '.join(f'{c:.4g}' for c in x)}) m")
@@ -222,12 +267,7 @@ def plot_element_loops(result: Result, path: Path):
         line = f"{el.angle_deg:g}°" if el.direction is None else el.line
         ax.set_title(f"{label}: {el.hysteresis}, {line}", fontsize=8)
         if peak_f[i] < NEGLIGIBLE * top:  # a panel of rounding noise would look like a loop
-            ax.text(0.5, 0.5, f"at rest: |f| at most {peak_f[i]:.1e} N,\nbelow 1e-9 of the largest: rounding",
-                    ha="center", va="center", fontsize=7.5, color="0.35", transform=ax.transAxes)
-            ax.set_xticks([])
-            ax.set_yticks([])
-            for spine in ax.spines.values():
-                spine.set_visible(False)
+            at_rest(ax, f"at rest: |f| at most {peak_f[i]:.1e} N,\nbelow 1e-9 of the largest: rounding")
             k += el.count
             continue
         u = sample[:, result.columns.index(f"e{k + 1}_u_m")]
