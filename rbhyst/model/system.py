@@ -33,28 +33,20 @@ class RecordEdges:
     near them are its breakpoints, so that the hat's halves are integrated piece by piece."""
 
     def __init__(self, series, jumps: tuple[float, ...], h: float):
-        self.series, self.jumps = series, jumps
-        times = series.times
-        near = np.zeros(len(times), dtype=bool)
-        for b in jumps:
-            near |= np.abs(times - b) <= 2.0 * h + series.dt
-        self.breakpoints = tuple(float(x) for x in times[near])
+        self.series = series
+        times, reach = series.times, 2.0 * h + series.dt
+        self.breakpoints = tuple(float(x) for b in jumps
+                                 for x in times[np.searchsorted(times, b - reach):np.searchsorted(times, b + reach,
+                                                                                                  side="right")])
 
     def __call__(self, t):
         return self.series(t)
 
 
-def record_edges(series, h: float) -> RecordEdges | None:
-    """RecordEdges of a record that jumps at its start (after t = 0) or end, or None: a record
-    that starts and ends at zero is linear between its samples everywhere, which the nodes that
-    hold them follow exactly."""
-    jumps = record_jumps(series)
-    return RecordEdges(series, jumps, h) if jumps else None
-
-
 def record_jumps(series) -> tuple[float, ...]:
     """The times a record jumps: its start (after t = 0) and its end, where its first or last
-    sample is not zero."""
+    sample is not zero (one that starts and ends at zero is linear between its samples
+    everywhere, which the nodes that hold them follow exactly)."""
     values = series.values
     if len(values) == 0:
         return ()
@@ -235,14 +227,14 @@ class Excitation:
         values = {}
         for k, s in self.signals.items():
             v = s(t)
-            shape = record_edges(s, h) if isinstance(s, Series) else s
-            if shape is not None:
-                near = np.zeros(len(t), dtype=bool)
-                for b in (shape.jumps if isinstance(s, Series) else s.breakpoints):
-                    if b > 0.0:  # a signal that starts with the analysis starts at its right limit
-                        near |= np.abs(t - b) < h
-                if near.any():
-                    v[near] = signals.hat_average(shape, t[near], h)
+            record = isinstance(s, Series)
+            breaks = record_jumps(s) if record else s.breakpoints
+            near = np.zeros(len(t), dtype=bool)
+            for b in breaks:
+                if b > 0.0:  # a signal that starts with the analysis starts at its right limit
+                    near |= np.abs(t - b) < h
+            if near.any():
+                v[near] = signals.hat_average(RecordEdges(s, breaks, h) if record else s, t[near], h)
             values[k] = v
         return self._combine(values, len(t), mass)
 
@@ -867,9 +859,9 @@ def _system(deck: dk.Deck, body, mass, rows, names, mult, elements, excitation, 
         rayleigh = rayleigh_damping(deck.damping.rayleigh, mass, k0)
     from rbhyst.model import plausible
 
+    spin = mass[2:] if len(mass) == 3 else mass[3:]  # (the plane's J; in space the principal moments)
     cautions = plausible.excitation_warnings(excitation, plausible.signal_units(deck), float(mass[0]),
-                                             float(np.max(mass[len(mass) // 2:])) if len(mass) > 3 else float(mass[2]),
-                                             body.extent)
+                                             float(np.max(spin)), body.extent)
     cautions += plausible.density_warning(body.mass, plausible.body_measure(body), getattr(body, "dimensions", 2))
     return System(
         title=deck.title or "",
