@@ -49,7 +49,7 @@ def analyse(system: System, settings: Settings, keep: bool = True, csv=None, pla
     from rbhyst.results.checks import diagnose
     from rbhyst.solve.choose import answer_at, chosen_run, estimated_run
     from rbhyst.solve.estimate import meet_tolerance, warnings_for
-    from rbhyst.solve.kinematic import kinematics_summary, kinematics_warning, needs_exact
+    from rbhyst.solve.kinematic import chosen_exact, kinematics_summary, kinematics_warning, needs_exact
 
     if spare_core is None:
         from rbhyst.cores import usable_cores
@@ -67,9 +67,7 @@ def analyse(system: System, settings: Settings, keep: bool = True, csv=None, pla
             if twin is not None:
                 small = result
                 result = meet_tolerance(twin, settings, keep=keep, csv=csv)
-                result.kinematics = kinematics_summary(small, settings, exact=result)
-                result.kinematics.update(model="exact", method="chosen by analysis.kinematics = \"auto\": the "
-                                         "terms the small rotations neglect reach a tenth of warn_error")
+                result.kinematics = chosen_exact(small, settings, result)
     elif settings.choose and settings.estimate:
         result = chosen_run(system, settings, keep=keep, csv=csv, progress=progress, spare_core=spare_core)
     else:

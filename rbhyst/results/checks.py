@@ -86,13 +86,9 @@ ROWS_PER_FEATURE = 10
 def unresolved_signals(result: Result) -> list[str]:
     """Analytic signals too fast for the output's dt: the integration follows them (substeps), the
     peaks and spectra see every compute step, but the rows sample at dt."""
-    import dataclasses
-
     from rbhyst.model.signals import Pulse
 
     s = result.settings
-    if result.chosen is not None:  # the rows are the output interval's, not the compute step's
-        s = dataclasses.replace(s, dt=result.chosen["dt_s"])
     t_end = result.stats.steps * s.dt
     fast: dict[tuple[str, float], list[str]] = {}
     for key, signal in result.system.excitation.signals.items():

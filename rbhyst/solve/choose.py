@@ -174,9 +174,7 @@ def chosen_run(system: System, settings, keep: bool = True, csv=None, progress=N
             result = _exact_finer(result, small, s, k, order, passes, keep, csv, progress, spare_core)
     why = _why(passes, warn, exact, share, where, result)
     result.chosen = {"method": result.settings.integrator,
-                     "compute_step_s": compute_step(result), "accuracy_substeps": result.settings.refine,
-                     "dt_s": s.dt, "output_interval_s": s.dt * s.every,
-                     "kinematics": result.system.kinematics,
+                     "compute_step_s": compute_step(result), "kinematics": result.system.kinematics,
                      "passes": passes, "why": why,
                      # (every pass's time stepping and estimate: what analysis.wall_s + accuracy.wall_s
                      # are of one run; wall_s the whole choice, its Python and planning included)
@@ -217,7 +215,7 @@ def answer_at(small: Result, sk, exact: bool, keep: bool, csv, rerun: bool, prog
     where its rows are to be written and it was run without: ``rerun``), or the exact twin's run,
     its error from the small run's (the module docstring). ``passes``: analysis.chosen's, which
     the exact run joins."""
-    from rbhyst.solve.kinematic import difference, exact_run, kinematics_summary
+    from rbhyst.solve.kinematic import chosen_exact, difference, exact_run
     from rbhyst.solve.plan import prepare
 
     passes = [] if passes is None else passes
@@ -234,28 +232,20 @@ def answer_at(small: Result, sk, exact: bool, keep: bool, csv, rerun: bool, prog
     if answer is None:  # (exact kinematics are built for the plane and the body in space)
         return small
     diff = difference(small, answer)
-    passes.append({"integrator": sk.integrator, "compute_step_s": compute_step(answer), "refine": sk.refine,
-                   "kinematics": "exact",
-                   "estimated_error": None, "column": "", "status": "the answer", "wall_s": answer.stats.wall_s})
     gap = max(diff.values(), default=0.0) if diff else math.inf
     # (only the companion's estimate needs the transfer: the adaptive solutions follow exact
     # kinematics as they follow small ones)
-    if small.accuracy is not None and "companion" in small.accuracy and gap <= TRANSFER_LIMIT:
+    transfer = small.accuracy is not None and "companion" in small.accuracy and gap <= TRANSFER_LIMIT
+    if transfer:
         answer.accuracy = transferred(small.accuracy, gap)
     elif sk.estimate:
         from rbhyst.solve.estimate import estimate
 
         answer.accuracy = estimate(answer, sk)
-    passes[-1]["estimated_error"], passes[-1]["column"] = (
-        (worst_of(answer.accuracy)) if answer.accuracy else (None, ""))
-    passes[-1]["wall_s"] += (answer.accuracy or {}).get("wall_s", 0.0) if gap > TRANSFER_LIMIT else 0.0
-    answer.kinematics = kinematics_summary(small, sk, exact=answer)
-    answer.kinematics["model"] = "exact"
-    answer.kinematics["method"] = (f"chosen by analysis.kinematics = \"auto\": the terms the small rotations neglect "
-                                   f"reach {answer.kinematics['neglected']['share']:.3g} of "
-                                   f"{answer.kinematics['neglected']['column']}, above a tenth of warn_error; "
-                                   f"difference: the small-rotation run at the same step against this one, "
-                                   "max_t |small - exact| / max_t |exact| per column")
+    passes.append({**pass_entry(answer, "exact"), "status": "the answer"})
+    if transfer:  # (its estimate is the small run's, counted in that pass)
+        passes[-1]["wall_s"] = answer.stats.wall_s
+    answer.kinematics = chosen_exact(small, sk, answer)
     return answer
 
 

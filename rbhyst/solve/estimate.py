@@ -465,12 +465,15 @@ def _halving(result, settings) -> dict:
 QUIET = 0.1
 
 
-def family_terms(errors: dict, result, measure: str = "the run's") -> tuple[dict, set]:
+def family_terms(errors: dict, result) -> tuple[dict, set]:
     """(each column's error against its family's scale, the quiet columns): ``errors`` (key ->
     max_t |x - x_ref| / its scale, column_errors' measure) restated in the terms of the column's
     family (translations with translations, rotations at the radius of gyration, forces with
     forces, moments with moments, accelerations with accelerations: error_scales), from the
-    run's own peaks; quiet: the columns whose peak is below QUIET of the family's scale."""
+    run's own peaks; quiet: the columns whose peak is below QUIET of the family's scale. Nothing
+    of either without a run (``result`` None or without its layout)."""
+    if result is None or result.layout is None:
+        return {}, set()
     cols = estimate_columns(result.layout)
     keys, families, columns = [k for k, _, _ in cols], [f for _, _, f in cols], [c for _, c, _ in cols]
     e = result.extremes
@@ -516,9 +519,8 @@ def warnings_for(accuracy: dict, settings, stats=None, result=None) -> list[str]
     if accuracy["status"] == "unavailable":
         return [f"the error could not be estimated: {accuracy['method']}"]
     err = accuracy["estimated_error"]
-    family, quiet = family_terms(err, result) if result is not None and result.layout is not None else ({}, set())
-    over = ranked(err, settings.warn_error, family, quiet)
-    name, worst = over[0] if over else (max(err.items(), key=lambda kv: kv[1]) if not family else ("", 0.0))
+    over = ranked(err, settings.warn_error, *family_terms(err, result))
+    name, worst = over[0] if over else ("", 0.0)
     out = []
     if accuracy["status"] == "sensitive":
         spread = max(accuracy["reference_spread"].values())

@@ -74,6 +74,19 @@ def kinematics_summary(result, settings, exact=None) -> dict:
     return out
 
 
+def chosen_exact(small, settings, exact) -> dict:
+    """summary.json's ``kinematics`` of an answer that analysis.kinematics = "auto" took in exact
+    rotations: the small-rotation run's screen, and its difference from the answer ``exact``."""
+    out = kinematics_summary(small, settings, exact=exact)
+    neglected = out.get("neglected", {})
+    out.update(model="exact", method=(
+        f"chosen by analysis.kinematics = \"auto\": the terms the small rotations neglect reach "
+        f"{neglected.get('share', 0.0):.3g} of {neglected.get('column', '')}, above a tenth of warn_error; "
+        "difference: the small-rotation run at the same step against this one, max_t |small - exact| / "
+        "max_t |exact| per column"))
+    return out
+
+
 def rotation_extent(result) -> tuple[dict, object]:
     """({"model", "max_rotation_rad"}, the rotation at rest) of a run; no max_rotation_rad for a
     body that does not turn (the start then None)."""
@@ -292,8 +305,7 @@ def kinematics_warning(kinematics: dict | None, warn_error: float, result=None) 
     theta = kinematics["max_rotation_rad"]
     diff = kinematics.get("difference")
     if diff:
-        family, quiet = family_terms(diff, result) if result is not None and result.layout is not None else ({}, set())
-        over = ranked(diff, warn_error, family, quiet)
+        over = ranked(diff, warn_error, *family_terms(diff, result))
         if not over:
             return []
         (name, worst), more = over[0], over[1:]

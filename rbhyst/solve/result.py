@@ -61,7 +61,7 @@ class Result:
     #: (rbhyst.solve.choose): summary.json's analysis.chosen
     chosen: dict | None = None
     #: (n, 1 + k) time and the columns the error estimate compares (history.estimate_columns), at
-    #: every ``compare_every``-th step
+    #: every ``compare_every``-th compute step
     compared: np.ndarray | None = None
     compare_every: int = 1
     spectra: "LocatedSpectra | None" = None  # output.spectra: of the ground, G and the points, over every step
