@@ -154,20 +154,17 @@ def at_rest(ax, text: str, time_axis: bool = False) -> None:
         spine.set_visible(time_axis and side == "bottom")
 
 
-def family_scale(result: Result, columns: list[str], rotations: list[bool]) -> dict[str, float]:
-    """Each column's family's largest peak in the column's own unit: translations with
-    translations, a rotation counted at the body's radius of gyration (sqrt(J / m))."""
-    system = result.system
-    masses = np.asarray(system.mass, dtype=float)
-    frame = getattr(system, "frame", None)
-    if frame is not None:
-        masses = np.einsum("ij,j,ij->i", frame, system.mass, frame)
-    m = next((masses[j] for j, c in enumerate(system.coordinates) if not c.rotation), 1.0)
-    spin = [masses[j] for j, c in enumerate(system.coordinates) if c.rotation]
-    rg = math.sqrt(max(spin) / m) if spin else 1.0
-    length = [rg if r else 1.0 for r in rotations]
-    top = max(result.extremes.peak(c) * f for c, f in zip(columns, length))
-    return {c: top / f for c, f in zip(columns, length)}
+def family_scale(result: Result, family: str) -> dict[str, float]:
+    """Each coordinate's column of ``family`` ("d" displacements, "at" total accelerations) and
+    the family's largest peak in that column's unit (estimate.family_scales: a rotation counted
+    at the body's radius of gyration)."""
+    from rbhyst.solve.estimate import family_scales
+
+    coords = result.system.coordinates
+    columns = [c.column(family) for c in coords]
+    peaks = np.array([result.extremes.peak(c) for c in columns])
+    scales = family_scales(peaks, [c.key(family) for c in coords], [family] * len(coords), result.system)
+    return dict(zip(columns, map(float, scales)))
 
 
 @styled
@@ -213,9 +210,7 @@ def plot_response(result: Result, k: int, path: Path) -> None:
     rounding said to be at rest. Returns the figure (saved to ``path``)."""
     rows = response_rows(result.system.coordinates)
     d, at, d_label, at_label, name = rows[k]
-    spins = [c.rotation for c in result.system.coordinates]
-    d_scale = family_scale(result, [r[0] for r in rows], spins)[d]
-    at_scale = family_scale(result, [r[1] for r in rows], spins)[at]
+    d_scale, at_scale = family_scale(result, "d")[d], family_scale(result, "at")[at]
     fig, axes = subplots(2, 1, figsize=(8, 4.5), sharex=True)
     _line(axes[0], result, d, d_scale, d_label.split("[")[1].rstrip("]"), lw=0.8, color="C0")
     axes[0].set_ylabel(d_label)
