@@ -38,19 +38,11 @@ ROOT = Path(__file__).resolve().parent.parent
 
 
 def truth_errors(res) -> dict[str, float]:
-    from rbhyst.model.kinematics import exact_twin
-    from rbhyst.solve.estimate import column_errors
-    from rbhyst.solve.history import Layout, estimate_columns
-    from rbhyst.solve.integrators import reference
-    from rbhyst.solve.static import at_rest_under_gravity
+    """Every column's error against the body's exact motion (the tests' measure; tests/ is on
+    the path: main)."""
+    from test_right_first_time import errors_against_exact_motion
 
-    twin = at_rest_under_gravity(exact_twin(res.system))
-    exact = reference.integrate(twin, res.time, rtol=1e-12)
-    cols = estimate_columns(res.layout)
-    index = [c for _, c, _ in cols]
-    ref = Layout(twin, res.settings.points).table(exact.raw(twin))[:, index]
-    keys, fams = [k for k, _, _ in cols], [f for _, _, f in cols]
-    return dict(zip(keys, map(float, column_errors(res.table[:, index], ref, keys, fams, res.system))))
+    return errors_against_exact_motion(res)
 
 
 def space_scene(rng: np.random.Generator) -> dict:
