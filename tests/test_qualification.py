@@ -223,6 +223,61 @@ def test_the_ac156_motion_peaks_at_least_at_90_percent_of_a_rig(motion):
         assert np.allclose(mine["peak_min_g"], least, rtol=1e-5)
 
 
+@pytest.mark.slow
+@pytest.mark.parametrize("spectra, seed", [
+    (lambda: ac156(1.0, 0.0), 1),  # the vertical dipped to 0.88 x RRS at 1.8 Hz between 1/6-octave points
+    (lambda: ac156(2.5, 1.0), 2),
+    (lambda: ac156(0.5, 0.5), 3),
+    (lambda: ieee693("high"), 1),
+    (lambda: ieee693("moderate"), 2),
+    (lambda: ieee693("high", 0.02), 3),
+    (lambda: ieee693("moderate", 0.02), 1),
+])
+def test_made_motions_lie_in_the_band_on_a_fine_grid_by_an_independent_spectrum(spectra, seed):
+    from independent_spectra import octave_grid, trs
+
+    rrs = spectra()
+    m, = matching.make_motions(rrs, 1, 30.0, 0.005, seed)
+    for axis, r in rrs.items():
+        f = octave_grid(*r.check_range, 48)
+        ratio = trs(m.records[axis].acc_g * G, 0.005, f, r.damping) / r(f)
+        lo, hi = r.band
+        assert ratio.min() >= lo and ratio.max() <= hi, (axis, ratio.min(), f[ratio.argmin()], ratio.max())
+        c = m.records[axis].check.summary()  # the least and largest anywhere, as computed here
+        assert c["fine_frequencies"] == len(f) and c["min_ratio"] == pytest.approx(ratio.min(), rel=4e-3)
+        assert c["max_ratio"] == pytest.approx(ratio.max(), rel=4e-3)
+
+
+def test_the_fine_grid_holds_the_standards_points_and_trs_fine_csv_is_its_table(motion):
+    coarse = np.genfromtxt(motion / "trs.csv", delimiter=",", names=True, dtype=None, encoding="utf-8")
+    fine = np.genfromtxt(motion / "trs_fine.csv", delimiter=",", names=True, dtype=None, encoding="utf-8")
+    assert coarse.dtype.names == fine.dtype.names
+    for axis in ("x1", "x2"):
+        c, f = coarse[coarse["axis"] == axis], fine[fine["axis"] == axis]
+        assert len(c) == 30 and len(f) == 226  # 1.3-33.3 Hz at 1/6 and 1/48 octave
+        per_decade = (len(f) - 1) / np.log10(f["frequency_hz"][-1] / f["frequency_hz"][0])
+        assert per_decade >= 100  # NRC SRP 3.7.1
+        k = np.searchsorted(f["frequency_hz"], c["frequency_hz"] * (1 - 1e-6))
+        assert np.allclose(f["frequency_hz"][k], c["frequency_hz"], rtol=1e-5)
+        assert np.array_equal(f["trs_g"][k], c["trs_g"])
+        facts = json.loads((motion / "motions.json").read_text())["motions"][0]["axes"][axis]["trs"]
+        assert facts["min_ratio"] == pytest.approx(f["ratio"].min(), rel=1e-5)
+        assert facts["min_at_hz"] == pytest.approx(f["frequency_hz"][f["ratio"].argmin()], rel=1e-5)
+
+
+def test_a_dip_between_the_standards_points_fails_the_check():
+    rrs = ac156(1.0, 0.0)["x1"]
+    f = matching.fine_grid(*rrs.check_range)
+    points = matching.standard_points(f, rrs.check_range)
+    sa = 1.1 * rrs(f)
+    sa[np.flatnonzero(~points)[40]] = 0.85 * rrs(f[np.flatnonzero(~points)[40]])  # off every 1/6-octave point
+    c = matching.Check(f[points], rrs(f[points]), sa[points], rrs.band, 1.0, None, f, rrs(f), sa)
+    assert c.within.all() and not c.fine_within.all() and not c.ok
+    s = c.summary()
+    assert s["min_ratio"] == pytest.approx(0.85) and s["outside_hz"] == []
+    assert s["outside_fine_hz"] == [[f[~points][40], f[~points][40]]]
+
+
 def test_the_same_seed_gives_the_same_bits(motion, tmp_path):
     code, err = invoke("make-motion", tmp_path / "again", *AC156_OPTIONS, "--no-plots")
     assert code == 0, err
@@ -298,7 +353,7 @@ def test_a_user_rrs_is_matched_on_its_own_range(tmp_path):
                        "--seed", "5", "--no-plots")
     assert code == 0, err
     assert sorted(p.name for p in (tmp_path / "m").iterdir()) == [".rbhyst.json", "m1_x1.csv", "motions.json",
-                                                                  "trs.csv"]
+                                                                  "trs.csv", "trs_fine.csv"]
     r = read_rrs(rrs, 0.02)
     dt, a = _acc_g(tmp_path / "m" / "m1_x1.csv")
     check = matching.check_record(a * G, dt, r)
@@ -431,7 +486,8 @@ def test_the_verdict_takes_its_demands_from_the_runs_summary(tmp_path):
         support = {axis: {"file": str(out / "motions" / f"m{k}_{axis}.csv"), "units": "g"} for axis in ("x1", "x2")}
         again = rbhyst.run(cab.with_values({"excitation.support": support})).summary()
         assert again["peaks"] == s["peaks"] and again["elements"] == s["elements"]
-    assert {p.name for p in out.iterdir()} == {".rbhyst.json", "motions", "run_1", "run_2", "trs.csv", "motions.json",
+    assert {p.name for p in out.iterdir()} == {".rbhyst.json", "motions", "run_1", "run_2", "trs.csv", "trs_fine.csv",
+                                                    "motions.json",
                                                 "qualification.json", "qualification.png"}
 
 

@@ -17,8 +17,8 @@ SPACE_AXIS_NAMES = {"x1": "x1 (horizontal)", "x2": "x2 (horizontal)", "x3": "x3 
 
 
 def _trs_panel(ax, axis: str, rrs, checks: list[tuple[str, object]], names: dict = AXIS_NAMES) -> None:
-    """RRS (black), its band over the checked range (shaded), each motion's TRS (colour, a dot
-    at every checked frequency, red where outside the band)."""
+    """RRS (black), its band over the checked range (shaded), each motion's TRS on the fine grid
+    (a line in colour, a dot at each of the standard's points, red rings where outside the band)."""
     lo, hi = rrs.check_range
     f = np.geomspace(lo / 2.0, hi * 2.0, 300)
     ax.plot(f, rrs(f) / G_STANDARD, color="k", lw=1.6, label=f"RRS, ζ = {rrs.damping:g}", zorder=3)
@@ -27,10 +27,15 @@ def _trs_panel(ax, axis: str, rrs, checks: list[tuple[str, object]], names: dict
     ax.fill_between(fb, a * rrs(fb) / G_STANDARD, b * rrs(fb) / G_STANDARD, color="0.8", alpha=0.6, lw=0,
                     label=f"{a:g}-{b:g} × RRS", zorder=1)
     for label, c in checks:
-        line, = ax.plot(c.frequency_hz, c.trs / G_STANDARD, marker="o", ms=2.5, lw=1.0, label=label, zorder=4)
-        bad = ~c.within
+        # the TRS on the fine grid as the line (its dips between the standard's points shown),
+        # the standard's points as dots, red rings where it leaves the band
+        f, sa = c.fine_frequency, c.fine_sa / G_STANDARD
+        line, = ax.plot(f, sa, lw=1.0, label=label, zorder=4)
+        ax.plot(c.frequency_hz, c.trs / G_STANDARD, "o", ms=2.5, color=line.get_color(), zorder=4,
+                label="the standard's 1/6-octave points" if label == checks[0][0] else None)
+        bad = ~c.fine_within
         if bad.any():
-            ax.plot(c.frequency_hz[bad], c.trs[bad] / G_STANDARD, "o", color="red", ms=5, mfc="none", zorder=5)
+            ax.plot(f[bad], sa[bad], "o", color="red", ms=4, mfc="none", zorder=5)
     ax.axvline(lo, color="0.5", lw=0.6, ls=":")
     ax.axvline(hi, color="0.5", lw=0.6, ls=":")
     ax.set_xscale("log")

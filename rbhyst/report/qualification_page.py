@@ -92,7 +92,8 @@ def _verdict(q: dict, standard: str) -> str:
     over = [c for c in criteria if not c["pass"]]
     made = any(_made(m) for m in q.get("motions", []))
     conditions = [
-        (trs.get("pass"), "Every motion's test response spectrum lies within its band at every check frequency "
+        (trs.get("pass"), "Every motion's test response spectrum lies within its band at every frequency of the "
+                          "1/48-octave grid of the check range (the standard's 1/6-octave points among it) "
                           "and its peak acceleration is at least the least it may be"
                           + (", and its components are independent" if made else "") + "."),
         (acc.get("pass"), f"Every run vouches for its accuracy: {acc.get('rule', '')}."),
@@ -163,9 +164,10 @@ def _spectra(q: dict) -> str:
                          num(t.get("peak_g"), f"{tp}.peak_g"), num(t.get("peak_min_g"), f"{tp}.peak_min_g"),
                          '<td class="ok">yes</td>' if t.get("pass") else '<td class="bad">no</td>',
                          num(facts.get("strong_motion_s"), f"{p}.strong_motion_s")])
-    every = " (trs.csv holds every frequency)" if any(_made(m) for m in q.get("motions", [])) else ""
+    every = " (trs.csv holds the standard's points, trs_fine.csv the fine grid)" if any(_made(m) for m in q.get("motions", [])) else ""
     out.append("<h3>The motions' test response spectra (TRS)</h3>"
-               "<p>The TRS over the RRS at each 1/6-octave check frequency: its lowest and highest, and where; "
+               "<p>The TRS over the RRS on the 1/48-octave grid of the check range (the standard's 1/6-octave "
+               "points among it): its lowest and highest anywhere, and where; "
                f"each motion's peak acceleration against the least it may be{every}.</p>"
                + table(["motion", "axis", "record", "lowest TRS/RRS", "at [Hz]", "highest TRS/RRS", "at [Hz]",
                         "peak [g]", "least peak [g]", "within", "strong motion [s]"], rows, set(range(3, 9)) | {10}))

@@ -13,13 +13,15 @@ their wavelet details):
 2. The motion is e(t) s(t) with an envelope e that rises over the first ramp (a raised cosine),
    holds 1 over the strong-motion part and falls over the last, then corrected to end at rest
    (below).
-3. Its TRS is computed at 1/12-octave control frequencies (and every 1/6-octave check
-   frequency) by rbhyst.response, the same oscillators ``rbhyst spectrum`` uses, the record
-   followed by rest as that command follows it; the Fourier amplitudes of s are multiplied by
-   the ratio aimed-at / TRS, interpolated on log frequency, and the loop goes on until the TRS
-   lies within the band at every check frequency, with a margin for the rounding of the file.
-   The aim is the middle of the band in logarithm: sqrt(0.9 x 1.3) = 1.08 times the RRS for
-   AC156's band, sqrt(1.0 x 1.3) = 1.14 for IEEE 693's.
+3. Its TRS is computed at 1/12-octave control frequencies and on the fine grid of the check
+   range (1/48 octave, about 160 frequencies a decade: NRC SRP 3.7.1 asks for at least 100, and
+   between 1/6-octave points a TRS can dip 10 % below the RRS) by rbhyst.response, the same
+   oscillators ``rbhyst spectrum`` uses, the record followed by rest as that command follows
+   it; the Fourier amplitudes of s are multiplied by the ratio aimed-at / TRS, interpolated on
+   log frequency, and the loop goes on until the TRS lies within the band at every frequency of
+   the fine grid (the standard's 1/6-octave points among them), with a margin for the rounding
+   of the file. The aim is the middle of the band in logarithm: sqrt(0.9 x 1.3) = 1.08 times
+   the RRS for AC156's band, sqrt(1.0 x 1.3) = 1.14 for IEEE 693's.
 4. Where the RRS asks for a least peak acceleration (AC156: 0.9 A_RIG; IEEE 693: the ZPA) and
    the record falls short of it, its largest peak is raised to it (with the margin) by the
    shape a peak of the process has on average (its autocorrelation, the transform of its power
@@ -41,7 +43,7 @@ import numpy as np
 
 from rbhyst.errors import AnalysisError, InputError
 from rbhyst.analyses.qualification.rrs import (AC156_DURATION, AC156_STRONG, G, IEEE693_DURATION, IEEE693_STRONG,
-                                               RRS, sixth_octave)
+                                               RRS, fine_grid, sixth_octave, standard_points)
 
 #: the TRS is aimed at this multiple of the RRS: the middle of the 0.9-1.3 band in logarithm
 AIM = math.sqrt(0.9 * 1.3)
@@ -124,8 +126,11 @@ def trs(acc: np.ndarray, dt: float, freqs: np.ndarray, damping: float) -> np.nda
 
 @dataclass
 class Check:
-    """The TRS of one record against its RRS at the 1/6-octave frequencies of the check range,
-    and its peak acceleration against the least the RRS asks for (when it asks: ``peak_min``)."""
+    """The TRS of one record against its RRS at the standard's 1/6-octave frequencies of the check
+    range (``frequency_hz``, ``rrs``, ``trs``: trs.csv's rows) and on the fine grid (``fine_hz``,
+    ``fine_rrs``, ``fine_trs``: 1/48 octave, which holds the 1/6-octave points; trs_fine.csv),
+    and its peak acceleration against the least the RRS asks for (when it asks: ``peak_min``).
+    It lies within the band only where it does at every frequency of both."""
 
     frequency_hz: np.ndarray
     rrs: np.ndarray  # m/s2
@@ -133,6 +138,9 @@ class Check:
     band: tuple[float, float]
     peak: float | None = None  # m/s2, the record's peak acceleration
     peak_min: float | None = None  # m/s2, the least it may be (None: not checked)
+    fine_hz: np.ndarray | None = None
+    fine_rrs: np.ndarray | None = None
+    fine_trs: np.ndarray | None = None
 
     @property
     def ratio(self) -> np.ndarray:
@@ -140,8 +148,34 @@ class Check:
 
     @property
     def within(self) -> np.ndarray:
+        """At the standard's points."""
+        return self._inside(self.ratio)
+
+    @property
+    def fine_frequency(self) -> np.ndarray:
+        return self.frequency_hz if self.fine_hz is None else self.fine_hz
+
+    @property
+    def fine_sa(self) -> np.ndarray:
+        """The TRS (m/s2) on the fine grid."""
+        return self.trs if self.fine_trs is None else self.fine_trs
+
+    @property
+    def fine_ratio(self) -> np.ndarray:
+        return self.ratio if self.fine_trs is None else self.fine_trs / self.fine_rrs
+
+    @property
+    def fine_within(self) -> np.ndarray:
+        """On the fine grid."""
+        return self._inside(self.fine_ratio)
+
+    def _inside(self, r: np.ndarray) -> np.ndarray:
         lo, hi = self.band
-        return (self.ratio >= lo) & (self.ratio <= hi)
+        return (r >= lo) & (r <= hi)
+
+    @property
+    def in_band(self) -> bool:
+        return bool(self.within.all()) and bool(self.fine_within.all())
 
     @property
     def peak_ok(self) -> bool:
@@ -149,16 +183,20 @@ class Check:
 
     @property
     def ok(self) -> bool:
-        return bool(self.within.all()) and self.peak_ok
+        return self.in_band and self.peak_ok
 
     def summary(self) -> dict:
-        r = self.ratio
+        """The least and largest ratio anywhere (on the fine grid) and where; the standard's points
+        outside the band, and the stretches of the fine grid outside it ([from, to] Hz)."""
+        r, f = self.fine_ratio, self.fine_frequency
         i, j = int(np.argmin(r)), int(np.argmax(r))
-        return {"pass": self.ok, "band": list(self.band), "frequencies": int(len(r)),
-                "min_ratio": float(r[i]), "min_at_hz": float(self.frequency_hz[i]),
-                "max_ratio": float(r[j]), "max_at_hz": float(self.frequency_hz[j]),
-                "outside_hz": [float(f) for f in self.frequency_hz[~self.within]],
-                "within_band": bool(self.within.all()),
+        return {"pass": self.ok, "band": list(self.band), "frequencies": int(len(self.ratio)),
+                "fine_frequencies": int(len(r)),
+                "min_ratio": float(r[i]), "min_at_hz": float(f[i]),
+                "max_ratio": float(r[j]), "max_at_hz": float(f[j]),
+                "outside_hz": [float(x) for x in self.frequency_hz[~self.within]],
+                "outside_fine_hz": stretches(f, ~self.fine_within),
+                "within_band": self.in_band,
                 "peak_g": None if self.peak is None else self.peak / G,
                 "peak_min_g": None if self.peak_min is None else self.peak_min / G,
                 "peak_pass": self.peak_ok}
@@ -174,9 +212,26 @@ class Check:
                 f"({s['max_at_hz']:.3g} Hz) times the RRS")
 
 
+def stretches(f: np.ndarray, bad: np.ndarray) -> list[list[float]]:
+    """The runs of consecutive ``bad`` frequencies, each as [first, last] Hz."""
+    out, start = [], None
+    for k, b in enumerate(bad):
+        if b and start is None:
+            start = k
+        if start is not None and (not b or k == len(bad) - 1):
+            out.append([float(f[start]), float(f[k if b else k - 1])])
+            start = None
+    return out
+
+
 def check_record(acc: np.ndarray, dt: float, rrs: RRS) -> Check:
-    f = sixth_octave(*rrs.check_range)
-    return Check(f, rrs(f), trs(acc, dt, f, rrs.damping), rrs.band, float(np.max(np.abs(acc))), rrs.peak_min)
+    """The TRS of a record (m/s2) on the fine grid of its RRS's check range, the standard's
+    1/6-octave points among them."""
+    fine = fine_grid(*rrs.check_range)
+    points = standard_points(fine, rrs.check_range)
+    sa = trs(acc, dt, fine, rrs.damping)
+    return Check(fine[points], rrs(fine[points]), sa[points], rrs.band, float(np.max(np.abs(acc))), rrs.peak_min,
+                 fine, rrs(fine), sa)
 
 
 @dataclass
@@ -329,7 +384,7 @@ def _matched_motion(rrs, number, duration, dt, seed, strong, vertical: str = "x2
 def _failure(m: Motion, rrs, duration, dt, seed, strong) -> str:
     """Why motion ``m`` fails, and what would work: another seed tried here, or a longer motion."""
     bad = [f"{axis}: its TRS lies from {r.check.said()}, outside {r.check.band[0]:g}-{r.check.band[1]:g}"
-           for axis, r in m.records.items() if not r.check.within.all()]
+           for axis, r in m.records.items() if not r.check.in_band]
     bad += [f"{axis}: {r.check.said_peak()}" for axis, r in m.records.items() if not r.check.peak_ok]
     pairs = m.correlations
     if len(pairs) == 1:
@@ -400,7 +455,7 @@ def match(rrs: RRS, duration: float, dt: float, strong: float, rng) -> tuple[np.
     m = n + int(math.ceil(4.0 / (0.5 * lo) / dt))
     f = np.fft.rfftfreq(m, dt)
     top = min(hi * 1.25, 0.4 / dt)
-    checks = sixth_octave(lo, hi)
+    checks = fine_grid(lo, hi)  # the band is met on the fine grid, the standard's points among it
     control = np.unique(np.concatenate([lo / 2.0 * 2.0 ** (np.arange(int(12 * math.log2(2 * top / lo)) + 1) / 12.0),
                                         checks]))
     # at the top of the range the TRS tends to the peak acceleration, which the content below
@@ -481,7 +536,9 @@ def record_name(motion: Motion, axis: str) -> str:
     return f"m{motion.number}_{axis}.csv"
 
 
-def trs_rows(motions: list[Motion]) -> list[str]:
+def trs_rows(motions: list[Motion], fine: bool = False) -> list[str]:
+    """trs.csv's lines (TRS_COLUMNS): a row per motion, axis and 1/6-octave point of the check
+    range; ``fine``: trs_fine.csv's, the same columns on the fine grid."""
     lines = [",".join(TRS_COLUMNS)]
     for m in motions:
         for axis, r in m.records.items():
@@ -490,10 +547,20 @@ def trs_rows(motions: list[Motion]) -> list[str]:
             peak = "" if c.peak is None else f"{c.peak / G:.6g}"
             least, ok_peak = ("", "") if c.peak_min is None else (f"{c.peak_min / G:.6g}",
                                                                   "yes" if c.peak_ok else "no")
-            for f, a, b, ok in zip(c.frequency_hz, c.rrs / G, c.trs / G, c.within):
+            rows = (zip(c.fine_frequency, c.fine_rrs / G, c.fine_trs / G, c.fine_within) if fine else
+                    zip(c.frequency_hz, c.rrs / G, c.trs / G, c.within))
+            for f, a, b, ok in rows:
                 lines.append(f"{m.number},{axis},{f:.6g},{a:.6g},{b:.6g},{b / a:.6g},{lo * a:.6g},{hi * a:.6g},"
                              f"{'yes' if ok else 'no'},{peak},{least},{ok_peak}")
     return lines
+
+
+def write_trs(folder, motions: list[Motion]) -> None:
+    """trs.csv (the standard's points) and trs_fine.csv (the fine grid) into ``folder``."""
+    from pathlib import Path
+
+    for name, fine in (("trs.csv", False), ("trs_fine.csv", True)):
+        (Path(folder) / name).write_text("\n".join(trs_rows(motions, fine)) + "\n", encoding="utf-8")
 
 
 def motions_summary(motions: list[Motion], rrs: dict[str, RRS], standard: str | None) -> dict:
@@ -503,8 +570,9 @@ def motions_summary(motions: list[Motion], rrs: dict[str, RRS], standard: str | 
     return {
         "rbhyst_version": __version__,
         "method": "envelope-shaped band-limited Gaussian noise (PCG64), Fourier amplitudes iterated by "
-                  "aim / TRS at 1/12-octave control frequencies until the TRS lies within the band at every "
-                  "1/6-octave check frequency; corrected to end at rest (final velocity and displacement zero "
+                  "aim / TRS at 1/12-octave control frequencies and the 1/48-octave grid of the check range "
+                  "until the TRS lies within the band at every frequency of that grid (the standard's "
+                  "1/6-octave points among them); corrected to end at rest (final velocity and displacement zero "
                   "for the record linear between its samples)",
         "aim": {"ratio": AIM, "at_top_of_range": TOP_AIM},
         "standard": standard,

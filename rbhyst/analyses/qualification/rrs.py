@@ -220,11 +220,33 @@ def ieee693(level: str, damping: float | None = None) -> dict[str, RRS]:
     return out
 
 
-def sixth_octave(f_lo: float, f_hi: float) -> np.ndarray:
-    """1/6-octave frequencies from f_lo up to f_hi, f_hi itself included."""
-    n = int(math.floor(6.0 * math.log2(f_hi / f_lo) + 1e-9))
-    f = f_lo * 2.0 ** (np.arange(n + 1) / 6.0)
+def octave_points(f_lo: float, f_hi: float, per_octave: int) -> np.ndarray:
+    """``per_octave`` frequencies an octave from f_lo up to f_hi, f_hi itself included."""
+    n = int(math.floor(per_octave * math.log2(f_hi / f_lo) + 1e-9))
+    f = f_lo * 2.0 ** (np.arange(n + 1) / per_octave)
     return f if f[-1] >= f_hi * (1 - 1e-9) else np.append(f, f_hi)
+
+
+def sixth_octave(f_lo: float, f_hi: float) -> np.ndarray:
+    """1/6-octave frequencies from f_lo up to f_hi, f_hi itself included: the standard's points."""
+    return octave_points(f_lo, f_hi, 6)
+
+
+#: the fine grid's points per octave: about 160 per decade, above the 100 per decade at least
+#: that NRC SRP 3.7.1 (Rev. 4, II.1.B) asks of the frequencies a spectrum is computed at; a
+#: multiple of 6, so that it holds the 1/6-octave points
+FINE_PER_OCTAVE = 48
+
+
+def fine_grid(f_lo: float, f_hi: float) -> np.ndarray:
+    """1/48-octave frequencies from f_lo up to f_hi, f_hi included: every 1/6-octave point among them."""
+    return octave_points(f_lo, f_hi, FINE_PER_OCTAVE)
+
+
+def standard_points(fine: np.ndarray, check_range: tuple[float, float]) -> np.ndarray:
+    """Which of the fine grid's frequencies are the 1/6-octave points (a mask)."""
+    six = sixth_octave(*check_range)
+    return np.isin(np.arange(len(fine)), np.searchsorted(fine, six * (1 - 1e-12)))
 
 
 # ---------------------------------------------------------------- from files

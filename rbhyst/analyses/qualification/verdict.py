@@ -122,7 +122,7 @@ def output_files(req: Request) -> list[str]:
     n = 1 if req.motions == "deck" else req.motions
     files = ["qualification.json"] + [f"run_{k}/summary.json" for k in range(1, n + 1)]
     if req.motions != "deck":
-        files += ["trs.csv", "motions.json"] + [f"motions/m{k}_{axis}.csv" for k in range(1, n + 1) for axis in req.rrs]
+        files += ["trs.csv", "trs_fine.csv", "motions.json"] + [f"motions/m{k}_{axis}.csv" for k in range(1, n + 1) for axis in req.rrs]
     return files
 
 
@@ -220,7 +220,7 @@ def qualify(deck, req: Request, folder: Path, integrator: str | None = None, dt:
             checks[axis].append(("TRS, the deck's motion", c))
             trs_ok &= c.ok
             peak_ok &= c.peak_ok
-            band_ok &= bool(c.within.all())
+            band_ok &= c.in_band
         motion_facts.append({"number": 1, "source": "the deck's excitation.support",
                              "trs": {axis: c.summary() for axis, c in own.items()}})
         decks = [("deck", _deck_with_motion(deck, None))]
@@ -239,9 +239,9 @@ def qualify(deck, req: Request, folder: Path, integrator: str | None = None, dt:
             decks.append((f"motion {m.number}", _deck_with_motion(deck, _support(files), m.duration, notes)))
         trs_ok = all(m.ok for m in made)
         peak_ok = all(r.check.peak_ok for m in made for r in m.records.values())
-        band_ok = all(r.check.within.all() for m in made for r in m.records.values()) and \
+        band_ok = all(r.check.in_band for m in made for r in m.records.values()) and \
             all(m.correlation is None or abs(m.correlation) < matching.MAX_CORRELATION for m in made)
-        (folder / "trs.csv").write_text("\n".join(matching.trs_rows(made)) + "\n", encoding="utf-8")
+        matching.write_trs(folder, made)
         summary = matching.motions_summary(made, req.rrs, req.standard)
         (folder / "motions.json").write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")
         motion_facts = [{**m, "files": {a: f"motions/{f}" for a, f in m["files"].items()}} for m in summary["motions"]]
@@ -292,27 +292,30 @@ def qualify(deck, req: Request, folder: Path, integrator: str | None = None, dt:
 
 
 def _deck_trs(excitation, duration: float, rrs: dict[str, RRS]) -> dict:
-    """The TRS of the deck's own support motion per axis, from its signals (rbhyst.solve.ground)."""
-    from rbhyst.analyses.qualification.rrs import sixth_octave
+    """The TRS of the deck's own support motion per axis on the fine grid of the check range (the
+    standard's points among it), from its signals (rbhyst.solve.ground)."""
+    from rbhyst.analyses.qualification.rrs import fine_grid, standard_points
     from rbhyst.solve.ground import ground_spectra, signal_chunks
     from rbhyst.solve.located import rest_samples
 
     out = {}
     for axis, r in rrs.items():
         signal = getattr(excitation, "ag" + axis[1:])
-        f = sixth_octave(*r.check_range)
+        f = fine_grid(*r.check_range)
+        points = standard_points(f, r.check_range)
         if signal is None:
-            out[axis] = matching.Check(f, r(f), np.zeros(len(f)), r.band, 0.0, r.peak_min)
-            continue
-        periods = np.sort(1.0 / f)
-        step = getattr(signal, "dt", periods[0] / 20.0)
-        t_end = max(duration, signal.end or duration) + rest_samples(periods, [r.damping], step) * step
-        sa = ground_spectra(type(excitation)(**{"ag" + axis[1:]: signal}), t_end, [r.damping],
-                            periods).spectrum.sa[:, 0, 0]
-        peak = 0.0  # the signal's peak acceleration, over its samples and the values it jumps to
-        for _, values, jump in signal_chunks(signal, t_end, periods[-1]):
-            peak = max(peak, float(np.max(np.abs(values), initial=0.0)), 0.0 if jump is None else abs(float(jump)))
-        out[axis] = matching.Check(f, r(f), sa[np.argsort(np.argsort(1.0 / f))], r.band, peak, r.peak_min)
+            sa, peak = np.zeros(len(f)), 0.0
+        else:
+            periods = np.sort(1.0 / f)
+            step = getattr(signal, "dt", periods[0] / 20.0)
+            t_end = max(duration, signal.end or duration) + rest_samples(periods, [r.damping], step) * step
+            sa = ground_spectra(type(excitation)(**{"ag" + axis[1:]: signal}), t_end, [r.damping],
+                                periods).spectrum.sa[:, 0, 0]
+            sa = sa[np.argsort(np.argsort(1.0 / f))]
+            peak = 0.0  # the signal's peak acceleration, over its samples and the values it jumps to
+            for _, values, jump in signal_chunks(signal, t_end, periods[-1]):
+                peak = max(peak, float(np.max(np.abs(values), initial=0.0)), 0.0 if jump is None else abs(float(jump)))
+        out[axis] = matching.Check(f[points], r(f[points]), sa[points], r.band, peak, r.peak_min, f, r(f), sa)
     return out
 
 
@@ -394,9 +397,9 @@ def verdict_lines(v: Verdict) -> list[str]:
     for c in v.criteria:
         if not c["pass"]:
             lines.append(f"fail: {c['label']}: {c['demand']:.4g} {c['unit']} > {c['capacity']:.4g} {c['unit']}")
-    # where every check frequency's TRS is: trs.csv of made motions; the deck's own motion's in
+    # where every checked frequency's TRS is: trs.csv and trs_fine.csv of made motions; the deck's own motion's in
     # qualification.json (its lowest and highest) and qualification.png
-    where = "trs.csv" if any("files" in m for m in d["motions"]) else "qualification.json, qualification.png"
+    where = "trs.csv, trs_fine.csv" if any("files" in m for m in d["motions"]) else "qualification.json, qualification.png"
     if not d["trs"]["within_band"]:
         lines.append(f"fail: the motions' TRS is not within the RRS's band ({where})")
     if not d["trs"]["peak_pass"]:
