@@ -832,6 +832,9 @@ def qualify(
     seed: Annotated[Optional[int], typer.Option(help="Random seed of the motions.")] = None,
     duration: Annotated[Optional[float], typer.Option(help="Length of each motion in s (AC156: 30).")] = None,
     motion_dt: Annotated[Optional[float], typer.Option(help="Sample step of the motions in s.")] = None,
+    statistic: Annotated[Optional[str], typer.Option(help="The demand over the motions: max (the largest, the "
+                                                          "default) or mean (from 7 motions on, ASCE 7-10 "
+                                                          "16.2.4).")] = None,
     integrator: Annotated[Optional[str], typer.Option(help="Override analysis.integrator.")] = None,
     dt: Annotated[Optional[float], typer.Option(help="Override analysis.dt, in s.")] = None,
     tolerance: Annotated[Optional[float], typer.Option(help="The accuracy asked for (see rbhyst run).")] = None,
@@ -854,7 +857,7 @@ def qualify(
         req = request(d, {"standard": standard, "sds": sds, "z_over_h": z_over_h, "level": level, "rrs": rrs,
                           "rrs_x2": rrs_x2, "rrs_x3": rrs_x3,
                           "rrs_damping": rrs_damping, "motions": motions, "seed": seed, "duration": duration,
-                          "motion_dt": motion_dt})
+                          "motion_dt": motion_dt, "statistic": statistic})
         target = out if out is not None else _sibling_dir(d, deck, "-qualify")
         check_free(target, output_files(req) + (["qualification.png"] if plots and d.output.plots else []))
         if report:

@@ -466,7 +466,8 @@ def test_the_verdict_takes_its_demands_from_the_runs_summary(tmp_path):
     assert err.splitlines()[-2].startswith("verdict: pass: 16 criteria, 16 within capacity; least margin ")
     q = json.loads((out / "qualification.json").read_text())
     assert q["pass"] and q["trs"]["pass"] and q["accuracy"]["pass"] and q["warnings"] == []
-    assert q["statistic"] == "the largest over the 2 motions (fewer than seven: ASCE 7-10 16.2.4)"
+    assert q["statistic"] == {"asked": "max", "used": "max", "motions": 2,
+                              "rule": "the largest over the 2 motions: each motion a test the equipment must pass"}
     summaries = [json.loads((out / f"run_{k}" / "summary.json").read_text()) for k in (1, 2)]
     kinds = [c["criterion"] for c in q["criteria"]]
     assert kinds == ["stroke"] * 4 + ["acceleration"] * 4 + ["force"] * 8
@@ -489,6 +490,39 @@ def test_the_verdict_takes_its_demands_from_the_runs_summary(tmp_path):
     assert {p.name for p in out.iterdir()} == {".rbhyst.json", "motions", "run_1", "run_2", "trs.csv", "trs_fine.csv",
                                                     "motions.json",
                                                 "qualification.json", "qualification.png"}
+
+
+def test_every_motion_is_judged_and_the_mean_is_the_demand_only_where_asked(tmp_path):
+    (tmp_path / "rrs.csv").write_text("frequency_hz,sa_g\n2.0,1.0\n20.0,1.0\n")
+    qualify = {"rrs": "rrs.csv", "rrs_damping": 0.05, "motions": 7, "duration": 8.0, "seed": 3}
+    first = _cabinet(tmp_path, {**qualify, "acceleration_limit_g": {"top": 50.0}})
+    code, err = invoke("qualify", first, "--out", tmp_path / "q0", "--no-plots")
+    assert code == 0, err
+    q = json.loads((tmp_path / "q0" / "qualification.json").read_text())
+    per = [s["peaks"]["top_at1_m_s2"] / G for s in
+           (json.loads((tmp_path / "q0" / f"run_{k}" / "summary.json").read_text()) for k in range(1, 8))]
+    assert q["statistic"]["used"] == "max" and q["criteria"][-2]["per_motion"] == per  # top x1
+    # a capacity the mean of the seven is within and some of them are not
+    cap = 0.5 * (np.mean(per) + max(per))
+    over = [f"motion {k}" for k, v in enumerate(per, start=1) if v > cap]
+    assert 0 < len(over) < 7
+    deck = _cabinet(tmp_path, {**qualify, "acceleration_limit_g": {"top": [float(cap), 50.0]}})
+    code, err = invoke("qualify", deck, "--out", tmp_path / "mean", "--no-plots", "--statistic", "mean")
+    assert code == 0, err
+    q = json.loads((tmp_path / "mean" / "qualification.json").read_text())
+    c = next(c for c in q["criteria"] if c["item"] == "top x1")
+    assert q["statistic"]["used"] == "mean" and c["demand"] == pytest.approx(np.mean(per), rel=1e-12)
+    assert c["pass"] and c["over_capacity"] == over and c["per_motion_pass"] == [v <= cap for v in per]
+    note = [line for line in err.splitlines() if line.startswith("note: acceleration top x1: over ")]
+    assert len(note) == 1 and all(m in note[0] for m in over) and "the mean, the verdict's statistic" in note[0]
+    # the default statistic: the largest, so the motions over capacity fail the deck
+    code, err = invoke("qualify", deck, "--out", tmp_path / "max", "--no-plots")
+    assert code == 1
+    q = json.loads((tmp_path / "max" / "qualification.json").read_text())
+    c = next(c for c in q["criteria"] if c["item"] == "top x1")
+    assert q["statistic"]["asked"] == "max" and c["demand"] == max(per) and not c["pass"] and c["over_capacity"] == over
+    assert any(line.startswith("fail: acceleration top x1: over ") and all(m in line for m in over)
+               for line in err.splitlines())
 
 
 def test_a_demand_beyond_its_capacity_fails_with_exit_1(tmp_path):

@@ -703,6 +703,9 @@ class Qualify(_Model):
         = None
     #: the force each element can take, N: one number for all, or by CSV name (e1, e2, ...)
     force_capacity_N: PosFloat | dict[str, PosFloat] | None = None
+    #: the demand over the motions: "max", the largest (every motion a test that must pass), or
+    #: "mean", their mean from seven motions on (ASCE 7-10 16.2.4; fewer: the largest)
+    statistic: Literal["max", "mean"] = "max"
 
     @model_validator(mode="after")
     def _one_spectrum(self):

@@ -119,13 +119,26 @@ def _criteria(q: dict) -> str:
         rows.append([c["criterion"], c["item"], num(c["demand"], f"{p}.demand"), num(c["capacity"], f"{p}.capacity"),
                      c["unit"], num(c["margin"], f"{p}.margin"),
                      '<td class="ok">within</td>' if c["pass"] else '<td class="bad">exceeded</td>',
-                     *([num(v, f"{p}.per_motion.{k}") for k, v in enumerate(c.get("per_motion", []))] if n > 1 else [])])
+                     *([_each(v, f"{p}.per_motion.{k}", ok) for k, (v, ok) in
+                        enumerate(zip(c.get("per_motion", []), c.get("per_motion_pass", [True] * n)))]
+                       if n > 1 else [])])
     motions = [f"motion {k + 1}" for k in range(n)] if n > 1 else []
+    statistic = q.get("statistic", "")
+    rule = statistic.get("rule", "") if isinstance(statistic, dict) else statistic
+    over = [f"{c['item']}: {', '.join(c['over_capacity'])}" for c in criteria if c.get("over_capacity")]
+    said = ("" if not over or n < 2 else
+            f"<p class=\"bad\">Over capacity in a motion of their own: {esc('; '.join(over))} (marked below).</p>")
     return ('<section class="page"><h2>Criteria</h2>'
-            f"<p>Demand: {esc(q.get('statistic', ''))}. Margin: {esc(q.get('margin', ''))}.</p>"
+            f"<p>Demand: {esc(rule)}. Margin: {esc(q.get('margin', ''))}.</p>" + said
             + table(["criterion", "item", "demand", "capacity", "unit", "margin", "", *motions], rows,
                     {2, 3, 5, *range(7, 7 + len(motions))})
             + "</section>")
+
+
+def _each(v, src: str, ok: bool) -> str:
+    """A motion's own demand, marked where it is over the capacity."""
+    cell = num(v, src)
+    return cell if ok else cell.replace('class="num"', 'class="num bad"', 1)
 
 
 def _spectra(q: dict) -> str:

@@ -41,9 +41,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from rbhyst.errors import AnalysisError, InputError
+from rbhyst.errors import AnalysisError
 from rbhyst.analyses.qualification.rrs import (AC156_DURATION, AC156_STRONG, G, IEEE693_DURATION, IEEE693_STRONG,
-                                               RRS, fine_grid, sixth_octave, standard_points)
+                                               RRS, fine_grid, standard_points)
 
 #: the TRS is aimed at this multiple of the RRS: the middle of the 0.9-1.3 band in logarithm
 AIM = math.sqrt(0.9 * 1.3)

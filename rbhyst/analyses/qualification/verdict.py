@@ -6,8 +6,11 @@ deck in space: x1 and x2 horizontal, x3 vertical) and
 every criterion the deck gives compared with its capacity: each element's stroke, the peak total
 acceleration at G and at each point of interest against the equipment's limit, each element's
 force against its capacity. The demand is the run's own figure (summary.json's peaks and
-strokes); over several motions it is the largest, or the mean from seven motions on (the rule of
-ASCE 7-10, 16.2.4, for response histories). A run whose error estimate exceeds
+strokes); over several motions it is, by ``qualify.statistic``, the largest ("max", the default:
+a test lab runs each motion as a test of its own, and the equipment must pass every one), or
+their mean from seven motions on ("mean": the rule of ASCE 7-10, 16.2.4, for an analysis by
+response histories; with fewer motions the largest). Every motion whose own demand exceeds a
+capacity is named, whatever the statistic. A run whose error estimate exceeds
 ``analysis.warn_error``, that is ``sensitive``, that has no estimate, or that warns, cannot vouch
 for its demands: the verdict is then a fail, whatever the margins.
 """
@@ -15,7 +18,6 @@ for its demands: the verdict is then a fail, whatever the margins.
 from __future__ import annotations
 
 import json
-import math
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -25,8 +27,10 @@ from rbhyst.analyses.qualification import matching
 from rbhyst.analyses.qualification.rrs import PLANE_AXES, SPACE_AXES, STANDARDS, G, RRS, requested_rrs
 from rbhyst.errors import InputError
 
-#: from this many motions on the demand is the mean over them, below it the largest (ASCE 7-10 16.2.4)
+#: with statistic = "mean": from this many motions on the demand is the mean over them, below it
+#: the largest (ASCE 7-10 16.2.4)
 MEAN_FROM = 7
+STATISTICS = ("max", "mean")
 _SPECTRUM_KEYS = ("standard", "sds", "z_over_h", "level", "rrs", "rrs_x2", "rrs_x3", "rrs_damping")
 
 
@@ -45,6 +49,8 @@ class Request:
     #: what each axis of the deck is: x1 horizontal, x2 vertical (PLANE_AXES); in space x1 and
     #: x2 horizontal, x3 vertical (SPACE_AXES)
     axes: dict = field(default_factory=lambda: dict(PLANE_AXES))
+    #: the demand over the motions: "max" or "mean" (see the module)
+    statistic: str = "max"
 
     @property
     def vertical(self) -> str:
@@ -68,7 +74,7 @@ def request(deck, cli: dict) -> Request:
               "rrs_damping": "--rrs-damping",
               "sds": "--sds", "z_over_h": "--z-over-h", "level": "--level", "motions": "--motions",
               "duration": "--duration",
-              "motion_dt": "--motion-dt", "seed": "--seed"}
+              "motion_dt": "--motion-dt", "seed": "--seed", "statistic": "--statistic"}
     keys = {k: option[k] if k in cli else f"qualify.{k}" for k in option}
     problems = []
     if "standard" in values and "rrs" in values:
@@ -87,6 +93,9 @@ def request(deck, cli: dict) -> Request:
             motions = 1
     if isinstance(motions, int) and motions < 1:
         problems.append(f"{keys['motions']}: {motions}: at least 1")
+    if values.get("statistic", "max") not in STATISTICS:
+        problems.append(f"{keys['statistic']}: {values['statistic']!r}: max (the largest over the motions) or mean "
+                        f"(their mean from {MEAN_FROM} motions on, ASCE 7-10 16.2.4)")
     rrs, standard = {}, None
     if not problems:
         spec_keys = {"rrs": keys["standard"] if "standard" in values else keys["rrs"], "rrs_x2": keys["rrs_x2"],
@@ -114,7 +123,8 @@ def request(deck, cli: dict) -> Request:
         raise InputError(problems)
     return Request(rrs, standard, motions, int(values.get("seed", 1)), float(values.get("duration", 30.0)),
                    float(values.get("motion_dt", 0.005)), values.get("acceleration_limit_g") or {},
-                   values.get("force_capacity_N"), dict(SPACE_AXES if space else PLANE_AXES))
+                   values.get("force_capacity_N"), dict(SPACE_AXES if space else PLANE_AXES),
+                   values.get("statistic", "max"))
 
 
 def output_files(req: Request) -> list[str]:
@@ -253,7 +263,7 @@ def qualify(deck, req: Request, folder: Path, integrator: str | None = None, dt:
         (folder / f"run_{k}").mkdir()
         write_summary(result, folder / f"run_{k}" / "summary.json")  # as rbhyst run writes it
         runs.append((label, s))
-    criteria = _criteria(deck, req, [s for _, s in runs])
+    criteria = _criteria(deck, req, runs)
     accuracy = _accuracy(runs, deck.analysis.warn_error)
     warnings = [f"{label}: {w}" for label, s in runs for w in s["warnings"]]
     n = len(runs)
@@ -266,8 +276,7 @@ def qualify(deck, req: Request, folder: Path, integrator: str | None = None, dt:
         "rrs": {axis: r.describe() for axis, r in req.rrs.items()},
         "axes": dict(req.axes),
         "motions": motion_facts,
-        "statistic": (f"the mean over the {n} motions (seven or more: ASCE 7-10 16.2.4)" if n >= MEAN_FROM else
-                      f"the largest over the {n} motion{'s' * (n != 1)} (fewer than seven: ASCE 7-10 16.2.4)"),
+        "statistic": statistic_facts(req.statistic, n),
         "margin": "1 - demand / capacity: the share of the capacity left (negative: exceeded)",
         "criteria": [{k: v for k, v in c.items() if k != "label"} for c in criteria],
         "trs": {"pass": trs_ok, "band": {axis: list(r.band) for axis, r in req.rrs.items()},
@@ -287,7 +296,7 @@ def qualify(deck, req: Request, folder: Path, integrator: str | None = None, dt:
     heading = (f"TRS within the band: {'yes' if trs_ok else 'no'}",
                f"estimated error {'not given' if est is None else f'{100 * est:.2g} %'} "
                f"(at most {100 * deck.analysis.warn_error:g} %)",
-               f"warnings: {len(warnings) or 'none'}", data["statistic"])
+               f"warnings: {len(warnings) or 'none'}", data["statistic"]["rule"])
     return Verdict(data, criteria, checks, heading)
 
 
@@ -319,20 +328,44 @@ def _deck_trs(excitation, duration: float, rrs: dict[str, RRS]) -> dict:
     return out
 
 
-def _statistic(values: list[float]) -> float:
-    return float(np.mean(values)) if len(values) >= MEAN_FROM else float(np.max(values))
+def used_statistic(asked: str, n: int) -> str:
+    """The statistic the demand is: "mean" only where asked and from MEAN_FROM motions on."""
+    return "mean" if asked == "mean" and n >= MEAN_FROM else "max"
 
 
-def _criterion(kind: str, item: str, unit: str, per_run: list[float], capacity: float, label: str, **extra) -> dict:
-    demand = _statistic(per_run)
+def statistic_facts(asked: str, n: int) -> dict:
+    """qualification.json's ``statistic``: asked, used, over how many motions, and its rule."""
+    used = used_statistic(asked, n)
+    motions = f"{n} motion{'s' * (n != 1)}"
+    if used == "mean":
+        rule = f"the mean over the {motions} (qualify.statistic = \"mean\": seven or more, ASCE 7-10 16.2.4)"
+    elif asked == "mean":
+        rule = (f"the largest over the {motions} (qualify.statistic = \"mean\" takes the mean from {MEAN_FROM} "
+                "motions on, ASCE 7-10 16.2.4)")
+    else:
+        rule = f"the largest over the {motions}: each motion a test the equipment must pass"
+    return {"asked": asked, "used": used, "motions": n, "rule": rule}
+
+
+def _criterion(kind: str, item: str, unit: str, per_run: list[float], capacity: float, label: str,
+               statistic: str, motions: list[str], **extra) -> dict:
+    """A criterion's demand (the statistic over ``per_run``), capacity, margin and pass, and each
+    motion's own demand and pass (``over_capacity``: the motions beyond it, whatever the statistic)."""
+    demand = float(np.mean(per_run)) if statistic == "mean" else float(np.max(per_run))
+    each = [bool(v <= capacity) for v in per_run]
     return {"criterion": kind, "item": item, "unit": unit, "demand": demand, "capacity": capacity,
             "margin": 1.0 - demand / capacity, "pass": bool(demand <= capacity), "per_motion": per_run,
+            "per_motion_pass": each, "over_capacity": [m for m, ok in zip(motions, each) if not ok],
             **extra, "label": label}
 
 
-def _criteria(deck, req: Request, summaries: list[dict]) -> list[dict]:
-    """Every criterion's demand (from each run's summary), capacity, margin and pass."""
+def _criteria(deck, req: Request, runs: list[tuple[str, dict]]) -> list[dict]:
+    """Every criterion's demand (from each run's summary, by the request's statistic), capacity,
+    margin and pass, with each motion's."""
     out = []
+    summaries = [s for _, s in runs]
+    motions = [label for label, _ in runs]
+    stat = used_statistic(req.statistic, len(runs))
     first = 1
     for i, (el, origin) in enumerate(deck.element_entries, start=1):
         span = f"e{first}" if el.count == 1 else f"e{first}-e{first + el.count - 1}"
@@ -348,7 +381,7 @@ def _criteria(deck, req: Request, summaries: list[dict]) -> list[dict]:
             peaks = [abs(st["peak_deformation_m"]) if (st["peak_deformation_m"] >= 0) == up else u * capacity
                      for st, u in zip(strokes, use)]
             out.append(_criterion("stroke", f"{origin.label} ({span})", "m", peaks, capacity,
-                                  f"stroke {origin.label} ({span})",
+                                  f"stroke {origin.label} ({span})", stat, motions,
                                   utilization=[float(u) for u in use], column=f"e{first}_u_m"))
         first += el.count
     directions = list(req.axes)  # x1, x2 (and x3 in space)
@@ -358,7 +391,7 @@ def _criteria(deck, req: Request, summaries: list[dict]) -> list[dict]:
             column = f"at{j + 1}_m_s2" if name == "G" else f"{name}_at{j + 1}_m_s2"
             per_run = [s["peaks"][column] / G for s in summaries]
             out.append(_criterion("acceleration", f"{name} {direction}", "g", per_run, float(limits[j]),
-                                  f"acceleration {name} {direction}", column=column))
+                                  f"acceleration {name} {direction}", stat, motions, column=column))
     caps = req.force_capacity_N
     if caps is not None:
         n_el = sum(el.count for el in deck.all_elements)
@@ -366,7 +399,8 @@ def _criteria(deck, req: Request, summaries: list[dict]) -> list[dict]:
         for name in sorted(named, key=lambda e: int(e[1:])):
             column = f"{name}_f_N"
             per_run = [s["peaks"][column] for s in summaries]
-            out.append(_criterion("force", name, "N", per_run, float(named[name]), f"force {name}", column=column))
+            out.append(_criterion("force", name, "N", per_run, float(named[name]), f"force {name}", stat, motions,
+                                  column=column))
     return out
 
 
@@ -394,9 +428,17 @@ def verdict_lines(v: Verdict) -> list[str]:
     """The console's account: each failed criterion, the least margin, and the verdict."""
     d = v.data
     lines = [f"note: {n}" for n in d["notes"]]
+    used = d["statistic"]["used"]
     for c in v.criteria:
         if not c["pass"]:
-            lines.append(f"fail: {c['label']}: {c['demand']:.4g} {c['unit']} > {c['capacity']:.4g} {c['unit']}")
+            lines.append(f"fail: {c['label']}: {c['demand']:.4g} {c['unit']} > {c['capacity']:.4g} {c['unit']}"
+                         + (f" (the {used} over the motions)" if len(c["per_motion"]) > 1 else ""))
+        if c["over_capacity"] and len(c["per_motion"]) > 1:
+            over = [x for x, ok in zip(c["per_motion"], c["per_motion_pass"]) if not ok]
+            each = ", ".join(f"{m} {x:.4g}" for m, x in zip(c["over_capacity"], over))
+            lines.append(f"{'note' if c['pass'] else 'fail'}: {c['label']}: over {c['capacity']:.4g} {c['unit']} in "
+                         f"{len(c['over_capacity'])} of {len(c['per_motion'])} motions: {each} {c['unit']}"
+                         + (f"; the {used}, the verdict's statistic, is within" if c["pass"] else ""))
     # where every checked frequency's TRS is: trs.csv and trs_fine.csv of made motions; the deck's own motion's in
     # qualification.json (its lowest and highest) and qualification.png
     where = "trs.csv, trs_fine.csv" if any("files" in m for m in d["motions"]) else "qualification.json, qualification.png"
