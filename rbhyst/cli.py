@@ -744,7 +744,7 @@ RECORD_MARK = "# rbhyst make-record"
 @app.command("make-motion", cls=Command)
 def make_motion(
     out: Annotated[Path, typer.Argument(help="Folder to write: m1_x1.csv, m1_x2.csv, ..., trs.csv, trs_fine.csv, "
-                                             "trs.png, motions.json.")],
+                                             "records.csv, trs.png, motions.json.")],
     rrs: Annotated[Optional[str], typer.Option(help="ac156, ieee693, or a CSV RRS for x1 (frequency_hz and a value "
                                                     "column with its unit: sa_g, sa_m_s2).")] = None,
     rrs_x2: Annotated[Optional[str], typer.Option("--rrs-x2", help="A CSV RRS for x2 (vertical), with an RRS "
@@ -789,7 +789,7 @@ def make_motion(
                 for axis in m.records:
                     (tmp / matching.record_name(m, axis)).write_text(matching.record_text(m, axis, mark),
                                                                     encoding="utf-8")
-            matching.write_trs(tmp, made)
+            matching.write_tables(tmp, made)
             (tmp / "motions.json").write_text(json.dumps(matching.motions_summary(made, spectra, standard), indent=2)
                                               + "\n", encoding="utf-8")
             if plots:
@@ -799,8 +799,10 @@ def make_motion(
     for m in made:
         for axis, r in m.records.items():
             least = "" if r.check.peak_min is None else f" (at least {r.check.peak_min / 9.80665:.3g} g)"
+            strong = "" if r.strong_min is None else f" (at least {r.strong_min:g} s)"
             say(f"motion {m.number} {axis}: TRS from {r.check.said()} at {len(r.check.fine_frequency)} frequencies "
-                f"({r.iterations} iterations); peak {float(abs(r.acc_g).max()):.3g} g{least}")
+                f"({r.iterations} iterations); peak {float(abs(r.acc_g).max()):.3g} g{least}; strong motion "
+                f"{r.strong:.3g} s{strong}")
         if m.correlation is not None:
             say(f"motion {m.number}: correlation of x1 and x2 {m.correlation:+.3f}")
     say(f"wrote {out}")

@@ -167,23 +167,30 @@ def _spectra(q: dict) -> str:
                 facts = motion["axes"][axis]
                 t, tp = facts["trs"], f"{p}.trs"
                 where = motion["files"][axis]
-            else:  # the deck's own: its TRS alone
-                p = tp = f"{SRC}:motions.{m}.trs.{axis}"
-                facts, t = {}, motion["trs"][axis]
+            else:  # the deck's own: its TRS, and its strong motion where it is a record
+                tp = f"{SRC}:motions.{m}.trs.{axis}"
+                p = f"{SRC}:motions.{m}.strong_motion.{axis}"
+                facts, t = (motion.get("strong_motion") or {}).get(axis) or {}, motion["trs"][axis]
                 where = motion.get("source", "the deck's excitation.support")
             rows.append([str(motion.get("number", m + 1)), axis, where,
                          num(t.get("min_ratio"), f"{tp}.min_ratio"), num(t.get("min_at_hz"), f"{tp}.min_at_hz"),
                          num(t.get("max_ratio"), f"{tp}.max_ratio"), num(t.get("max_at_hz"), f"{tp}.max_at_hz"),
                          num(t.get("peak_g"), f"{tp}.peak_g"), num(t.get("peak_min_g"), f"{tp}.peak_min_g"),
                          '<td class="ok">yes</td>' if t.get("pass") else '<td class="bad">no</td>',
-                         num(facts.get("strong_motion_s"), f"{p}.strong_motion_s")])
+                         num(facts.get("strong_motion_s"), f"{p}.strong_motion_s"),
+                         num(facts.get("strong_motion_min_s"), f"{p}.strong_motion_min_s"),
+                         num(facts.get("arias_5_75_s"), f"{p}.arias_5_75_s"),
+                         num(facts.get("arias_5_95_s"), f"{p}.arias_5_95_s")])
     every = " (trs.csv holds the standard's points, trs_fine.csv the fine grid)" if any(_made(m) for m in q.get("motions", [])) else ""
     out.append("<h3>The motions' test response spectra (TRS)</h3>"
                "<p>The TRS over the RRS on the 1/48-octave grid of the check range (the standard's 1/6-octave "
                "points among it): its lowest and highest anywhere, and where; "
-               f"each motion's peak acceleration against the least it may be{every}.</p>"
+               f"each motion's peak acceleration against the least it may be{every}; its strong motion "
+               f"({esc(q.get('trs', {}).get('strong_motion_definition', ''))}) against the least, and its "
+               "Arias durations beside.</p>"
                + table(["motion", "axis", "record", "lowest TRS/RRS", "at [Hz]", "highest TRS/RRS", "at [Hz]",
-                        "peak [g]", "least peak [g]", "within", "strong motion [s]"], rows, set(range(3, 9)) | {10}))
+                        "peak [g]", "least peak [g]", "within", "strong motion [s]", "least [s]",
+                        "Arias 5-75 % [s]", "Arias 5-95 % [s]"], rows, set(range(3, 9)) | set(range(10, 14))))
     correlations = [(m, motion) for m, motion in enumerate(q.get("motions", [])) if "correlation_x1_x2" in motion]
     if correlations:
         cells = []

@@ -41,6 +41,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from rbhyst.analyses.qualification import strong_motion
 from rbhyst.errors import AnalysisError
 from rbhyst.analyses.qualification.rrs import (AC156_DURATION, AC156_STRONG, G, IEEE693_DURATION, IEEE693_STRONG,
                                                RRS, fine_grid, standard_points)
@@ -236,14 +237,31 @@ def check_record(acc: np.ndarray, dt: float, rrs: RRS) -> Check:
 
 @dataclass
 class Record:
-    """One axis of one motion: the acceleration as written (g, FILE_FORMAT digits) and its check."""
+    """One axis of one motion: the acceleration as written (g, FILE_FORMAT digits), its check,
+    its strong motion (strong_motion.measured) and the least it may be (None: not checked)."""
 
     axis: str
     acc_g: np.ndarray
     check: Check
     iterations: int
+    durations: dict = field(default_factory=dict)
+    strong_min: float | None = None
+    plateau: float | None = None  # s, the envelope's plateau it was made on
 
-    def facts(self, dt: float, strong: float, rrs: RRS) -> dict:
+    @property
+    def strong(self) -> float:
+        """Its strong motion, as the standards define it (the bracketed duration), s."""
+        return self.durations["bracketed_25_s"]
+
+    @property
+    def strong_ok(self) -> bool:
+        return self.strong_min is None or self.strong >= self.strong_min
+
+    @property
+    def ok(self) -> bool:
+        return self.check.ok and self.strong_ok
+
+    def facts(self, dt: float, rrs: RRS) -> dict:
         acc = self.acc_g * G
         v, d = integrate(acc, dt)
         pga = float(np.max(np.abs(self.acc_g)))
@@ -251,8 +269,11 @@ class Record:
                 "iterations": self.iterations,
                 "end_velocity_m_s": float(v[-1]), "end_displacement_m": float(d[-1]),
                 "peak_velocity_m_s": float(np.max(np.abs(v))), "peak_displacement_m": float(np.max(np.abs(d))),
-                "strong_motion_s": strong, "arias_5_95_s": arias_duration(acc, dt),
-                "strong_part_ratio": strong_part_ratio(acc, dt),
+                "displacement_peak_to_peak_m": float(np.max(d) - np.min(d)),
+                "strong_motion_s": self.strong, "strong_motion_min_s": self.strong_min,
+                "strong_motion_pass": self.strong_ok, "strong_motion_definition": strong_motion.DEFINITION,
+                **self.durations, "envelope_plateau_s": self.plateau,
+                "strong_part_ratio": strong_motion.strong_part_ratio(acc, dt),
                 "trs": self.check.summary()}
 
 
@@ -291,26 +312,11 @@ class Motion:
     @property
     def ok(self) -> bool:
         c = self.correlation
-        return all(r.check.ok for r in self.records.values()) and (c is None or abs(c) < MAX_CORRELATION)
+        return all(r.ok for r in self.records.values()) and (c is None or abs(c) < MAX_CORRELATION)
 
 
 #: AC156: the components must be statistically independent, correlation coefficient below this
 MAX_CORRELATION = 0.3
-
-
-def arias_duration(acc: np.ndarray, dt: float, lo: float = 0.05, hi: float = 0.95) -> float:
-    """Time between ``lo`` and ``hi`` of the Arias intensity (5 % to 95 %: the significant duration)."""
-    e = np.concatenate([[0.0], np.cumsum(0.5 * dt * (acc[:-1] ** 2 + acc[1:] ** 2))])
-    if e[-1] <= 0.0:
-        return 0.0
-    t = dt * np.arange(len(acc))
-    return float(np.interp(hi * e[-1], e, t) - np.interp(lo * e[-1], e, t))
-
-
-def strong_part_ratio(acc: np.ndarray, dt: float) -> float:
-    """IEEE 693's strong part ratio: the 25-75 % Arias duration over the 5-95 % one."""
-    whole = arias_duration(acc, dt)
-    return arias_duration(acc, dt, 0.25, 0.75) / whole if whole > 0.0 else 0.0
 
 
 def motion_problems(rrs: dict[str, RRS], duration: float, dt: float, strong: float | None,
@@ -375,10 +381,27 @@ def _matched_motion(rrs, number, duration, dt, seed, strong, vertical: str = "x2
     m = Motion(number, seed, dt, duration, strong, vertical=vertical)
     stream = streams(rrs, vertical)
     for axis, r in rrs.items():
-        acc, iterations = match(r, duration, dt, strong, np.random.default_rng([seed, number, stream[axis]]))
-        acc_g = in_file_digits(acc / G)
-        m.records[axis] = Record(axis, acc_g, check_record(acc_g * G, dt, r), iterations)
+        m.records[axis] = _matched_record(r, axis, duration, dt, strong, (seed, number, stream[axis]))
     return m
+
+
+#: a record short of its strong motion is made again on a longer plateau, at most this often
+STRONG_TRIES = 3
+
+
+def _matched_record(r: RRS, axis: str, duration: float, dt: float, plateau: float, noise: tuple) -> Record:
+    """A record of one axis, its envelope's plateau lengthened (the same noise) until its
+    strong motion, measured, holds what the RRS asks (``strong_min_s``) where it can."""
+    for _ in range(STRONG_TRIES):
+        acc, iterations = match(r, duration, dt, plateau, np.random.default_rng(list(noise)))
+        acc_g = in_file_digits(acc / G)
+        rec = Record(axis, acc_g, check_record(acc_g * G, dt, r), iterations,
+                     strong_motion.measured(acc_g * G, dt), r.strong_min_s, plateau)
+        longest = duration - 1.0  # ramps of half a second at least
+        if rec.strong_ok or plateau >= longest:
+            return rec
+        plateau = min(longest, plateau + (rec.strong_min - rec.strong) + 0.5)
+    return rec
 
 
 def _failure(m: Motion, rrs, duration, dt, seed, strong) -> str:
@@ -386,6 +409,8 @@ def _failure(m: Motion, rrs, duration, dt, seed, strong) -> str:
     bad = [f"{axis}: its TRS lies from {r.check.said()}, outside {r.check.band[0]:g}-{r.check.band[1]:g}"
            for axis, r in m.records.items() if not r.check.in_band]
     bad += [f"{axis}: {r.check.said_peak()}" for axis, r in m.records.items() if not r.check.peak_ok]
+    bad += [f"{axis}: its strong motion lasts {r.strong:.3g} s, short of {r.strong_min:g} s ({strong_motion.DEFINITION})"
+            for axis, r in m.records.items() if not r.strong_ok]
     pairs = m.correlations
     if len(pairs) == 1:
         c = m.correlation
@@ -555,12 +580,33 @@ def trs_rows(motions: list[Motion], fine: bool = False) -> list[str]:
     return lines
 
 
-def write_trs(folder, motions: list[Motion]) -> None:
-    """trs.csv (the standard's points) and trs_fine.csv (the fine grid) into ``folder``."""
+#: records.csv's columns, one row per motion and axis: what the record is, beside trs.csv
+RECORD_COLUMNS = ("motion", "axis", "file", "pga_g", "pgv_m_s", "pgd_m", "displacement_peak_to_peak_m",
+                  "strong_motion_s", "strong_motion_min_s", "strong_motion_within", "bracketed_25_s",
+                  "arias_5_75_s", "arias_5_95_s")
+
+
+def record_rows(motions: list[Motion]) -> list[str]:
+    lines = [",".join(RECORD_COLUMNS)]
+    for m in motions:
+        for axis, r in m.records.items():
+            v, d = integrate(r.acc_g * G, m.dt)
+            least, ok = ("", "") if r.strong_min is None else (f"{r.strong_min:g}", "yes" if r.strong_ok else "no")
+            lines.append(",".join([str(m.number), axis, record_name(m, axis), f"{np.max(np.abs(r.acc_g)):.6g}",
+                                   f"{np.max(np.abs(v)):.6g}", f"{np.max(np.abs(d)):.6g}", f"{np.ptp(d):.6g}",
+                                   f"{r.strong:.4f}", least, ok, f"{r.durations['bracketed_25_s']:.4f}",
+                                   f"{r.durations['arias_5_75_s']:.4f}", f"{r.durations['arias_5_95_s']:.4f}"]))
+    return lines
+
+
+def write_tables(folder, motions: list[Motion]) -> None:
+    """trs.csv (the standard's points), trs_fine.csv (the fine grid) and records.csv (each
+    record's peaks and strong motion) into ``folder``."""
     from pathlib import Path
 
-    for name, fine in (("trs.csv", False), ("trs_fine.csv", True)):
-        (Path(folder) / name).write_text("\n".join(trs_rows(motions, fine)) + "\n", encoding="utf-8")
+    for name, lines in (("trs.csv", trs_rows(motions)), ("trs_fine.csv", trs_rows(motions, True)),
+                        ("records.csv", record_rows(motions))):
+        (Path(folder) / name).write_text("\n".join(lines) + "\n", encoding="utf-8")
 
 
 def motions_summary(motions: list[Motion], rrs: dict[str, RRS], standard: str | None) -> dict:
@@ -578,10 +624,11 @@ def motions_summary(motions: list[Motion], rrs: dict[str, RRS], standard: str | 
         "standard": standard,
         "rrs": {axis: r.describe() for axis, r in rrs.items()},
         "motions": [{"number": m.number, "seed": m.seed, "dt_s": m.dt, "duration_s": m.duration,
-                     "strong_motion_s": m.strong,
+                     # the least of its axes', each measured as the standards define it
+                     "strong_motion_s": min(r.strong for r in m.records.values()),
                      "correlation_x1_x2": m.correlation if len(m.records) < 3 else m.correlations["x1_x2"],
                      **({"correlations": m.correlations} if len(m.records) > 2 else {}),
                      "files": {axis: record_name(m, axis) for axis in m.records},
-                     "axes": {axis: r.facts(m.dt, m.strong, rrs[axis]) for axis, r in m.records.items()}}
+                     "axes": {axis: r.facts(m.dt, rrs[axis]) for axis, r in m.records.items()}}
                     for m in motions],
     }

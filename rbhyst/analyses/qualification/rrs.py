@@ -106,6 +106,9 @@ class RRS:
     #: the record's peak acceleration must be at least this multiple of the RRS at the top of
     #: ``check_range`` (None: not checked, as for a file's RRS)
     zpa_ratio: float | None = None
+    #: the least strong motion (s, rbhyst.analyses.qualification.strong_motion's bracketed
+    #: duration) a record must hold; None: not checked
+    strong_min_s: float | None = None
     #: sa (m/s2) at f (Hz) where a standard gives the curve by formulas (``frequency_hz`` and
     #: ``sa`` then tabulate it at its breakpoints); None: log-log between the breakpoints
     shape: Callable | None = None
@@ -130,7 +133,7 @@ class RRS:
         return {"name": self.name, "damping": self.damping, "check_range_hz": list(self.check_range),
                 "band": list(self.band), "frequency_hz": [float(f) for f in self.frequency_hz],
                 "sa_g": [float(a) for a in self.sa_g], "source": self.source,
-                "peak_min_ratio": self.zpa_ratio,
+                "peak_min_ratio": self.zpa_ratio, "strong_motion_min_s": self.strong_min_s,
                 "peak_min_g": None if self.peak_min is None else self.peak_min / G}
 
 
@@ -168,7 +171,7 @@ def ac156(sds: float, z_over_h: float) -> dict[str, RRS]:
         sa_g = np.array([flx / 10.0, flx, flx, rig])
         out[axis] = RRS(f"AC156 {what}, SDS = {sds:g} g, z/h = {z_over_h:g}", AC156_DAMPING,
                         np.array(AC156_F), sa_g * G, AC156_RANGE, AC156_BAND,
-                        "ICC-ES AC156 (with ASCE 7-05 to 7-16)", AC156_ZPA_RATIO)
+                        "ICC-ES AC156 (with ASCE 7-05 to 7-16)", AC156_ZPA_RATIO, AC156_STRONG)
     return out
 
 
@@ -216,7 +219,7 @@ def ieee693(level: str, damping: float | None = None) -> dict[str, RRS]:
             return factor * G * ieee693_sa_g(x, level, damping)
         out[axis] = RRS(f"IEEE 693 {level} performance level, {what}", damping, f, shape(f), IEEE693_RANGE,
                         IEEE693_BAND, f"IEEE Std 693-2005, Figure A.{1 if level == 'high' else 2}"
-                        + ("" if axis == "x1" else ", vertical 80 %"), IEEE693_ZPA_RATIO, shape)
+                        + ("" if axis == "x1" else ", vertical 80 %"), IEEE693_ZPA_RATIO, IEEE693_STRONG, shape)
     return out
 
 

@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from rbhyst.analyses.qualification import matching
+from rbhyst.analyses.qualification import matching, strong_motion
 from rbhyst.analyses.qualification.rrs import PLANE_AXES, SPACE_AXES, STANDARDS, G, RRS, requested_rrs
 from rbhyst.errors import InputError
 
@@ -132,7 +132,7 @@ def output_files(req: Request) -> list[str]:
     n = 1 if req.motions == "deck" else req.motions
     files = ["qualification.json"] + [f"run_{k}/summary.json" for k in range(1, n + 1)]
     if req.motions != "deck":
-        files += ["trs.csv", "trs_fine.csv", "motions.json"] + [f"motions/m{k}_{axis}.csv" for k in range(1, n + 1) for axis in req.rrs]
+        files += ["trs.csv", "trs_fine.csv", "records.csv", "motions.json"] + [f"motions/m{k}_{axis}.csv" for k in range(1, n + 1) for axis in req.rrs]
     return files
 
 
@@ -213,48 +213,15 @@ def qualify(deck, req: Request, folder: Path, integrator: str | None = None, dt:
     Long because it is the qualification's pipeline read top to bottom: the motions, their
     check, the runs, the criteria."""
     from rbhyst._version import __version__
-    from rbhyst.model.system import assemble
     from rbhyst.results.analysis import run_deck
     from rbhyst.results.writers import deck_as_run, write_summary
 
     folder = Path(folder).resolve()  # the runs' decks name the motions' files from their own folder
     runs = []  # (label, summary dict)
     notes: list[str] = []
-    motion_facts, checks = [], {axis: [] for axis in req.rrs}
-    trs_ok = peak_ok = band_ok = True
-    if req.motions == "deck":
-        system = assemble(deck, deck.base)
-        duration = deck.analysis.duration or system.excitation.duration or 0.0
-        own = _deck_trs(system.excitation, duration, req.rrs)
-        for axis, c in own.items():
-            checks[axis].append(("TRS, the deck's motion", c))
-            trs_ok &= c.ok
-            peak_ok &= c.peak_ok
-            band_ok &= c.in_band
-        motion_facts.append({"number": 1, "source": "the deck's excitation.support",
-                             "trs": {axis: c.summary() for axis, c in own.items()}})
-        decks = [("deck", _deck_with_motion(deck, None))]
-    else:
-        made = matching.make_motions(req.rrs, req.motions, req.duration, req.motion_dt, req.seed,
-                                     vertical=req.vertical)
-        (folder / "motions").mkdir()
-        mark = f"# rbhyst qualify {deck.source.name if deck.source else 'deck'}"
-        decks = []
-        for m in made:
-            files = {}
-            for axis in m.records:
-                files[axis] = folder / "motions" / matching.record_name(m, axis)
-                files[axis].write_text(matching.record_text(m, axis, mark), encoding="utf-8")
-                checks[axis].append((f"TRS, motion {m.number}", m.records[axis].check))
-            decks.append((f"motion {m.number}", _deck_with_motion(deck, _support(files), m.duration, notes)))
-        trs_ok = all(m.ok for m in made)
-        peak_ok = all(r.check.peak_ok for m in made for r in m.records.values())
-        band_ok = all(r.check.in_band for m in made for r in m.records.values()) and \
-            all(m.correlation is None or abs(m.correlation) < matching.MAX_CORRELATION for m in made)
-        matching.write_trs(folder, made)
-        summary = matching.motions_summary(made, req.rrs, req.standard)
-        (folder / "motions.json").write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")
-        motion_facts = [{**m, "files": {a: f"motions/{f}" for a, f in m["files"].items()}} for m in summary["motions"]]
+    given = _own_motion(deck, req) if req.motions == "deck" else _made_motions(deck, req, folder, notes)
+    decks, motion_facts, checks = given.decks, given.facts, given.checks
+    trs_ok, peak_ok, band_ok, strong_ok = given.ok, given.peak_ok, given.band_ok, given.strong_ok
     for k, (label, d) in enumerate(decks, start=1):
         if say is not None:
             say(f"running {label} ({k} of {len(decks)})")
@@ -283,7 +250,9 @@ def qualify(deck, req: Request, folder: Path, integrator: str | None = None, dt:
                 "check_range_hz": {axis: list(r.check_range) for axis, r in req.rrs.items()},
                 "max_correlation": matching.MAX_CORRELATION,
                 "peak_min_g": {axis: None if r.peak_min is None else r.peak_min / G for axis, r in req.rrs.items()},
-                "within_band": band_ok, "peak_pass": peak_ok},
+                "within_band": band_ok, "peak_pass": peak_ok,
+                "strong_motion_min_s": {axis: r.strong_min_s for axis, r in req.rrs.items()},
+                "strong_motion_pass": strong_ok, "strong_motion_definition": strong_motion.DEFINITION},
         "accuracy": accuracy,
         "warnings": warnings,
         "notes": notes,
@@ -298,6 +267,83 @@ def qualify(deck, req: Request, folder: Path, integrator: str | None = None, dt:
                f"(at most {100 * deck.analysis.warn_error:g} %)",
                f"warnings: {len(warnings) or 'none'}", data["statistic"]["rule"])
     return Verdict(data, criteria, checks, heading)
+
+
+@dataclass
+class GivenMotions:
+    """The motions a qualification runs: each one's deck, its facts, its TRS checks per axis and
+    whether they meet the RRS's rules."""
+
+    decks: list  # (label, deck)
+    facts: list[dict]
+    checks: dict  # axis -> [(label, Check)]
+    band_ok: bool = True  # every TRS within its band (and made motions' components independent)
+    peak_ok: bool = True  # every peak acceleration at least the least
+    strong_ok: bool = True  # every record's strong motion at least the least (None measured: not judged)
+
+    @property
+    def ok(self) -> bool:
+        return self.band_ok and self.peak_ok and self.strong_ok
+
+
+def _own_motion(deck, req: Request) -> GivenMotions:
+    """The deck's own excitation.support, checked against the RRS."""
+    from rbhyst.model.system import assemble
+
+    system = assemble(deck, deck.base)
+    duration = deck.analysis.duration or system.excitation.duration or 0.0
+    own = _deck_trs(system.excitation, duration, req.rrs)
+    strong = _deck_strong_motion(system.excitation, req.rrs)
+    given = GivenMotions([("deck", _deck_with_motion(deck, None))],
+                         [{"number": 1, "source": "the deck's excitation.support",
+                           "trs": {axis: c.summary() for axis, c in own.items()}, "strong_motion": strong}],
+                         {axis: [("TRS, the deck's motion", c)] for axis, c in own.items()})
+    given.band_ok = all(c.in_band for c in own.values())
+    given.peak_ok = all(c.peak_ok for c in own.values())
+    given.strong_ok = all(f is None or f["strong_motion_pass"] is not False for f in strong.values())
+    return given
+
+
+def _deck_strong_motion(excitation, rrs: dict[str, RRS]) -> dict:
+    """Each axis's strong motion where its signal is a record (None for an analytic signal)."""
+    from rbhyst.model.records import Series
+
+    out = {}
+    for axis, r in rrs.items():
+        signal = getattr(excitation, "ag" + axis[1:])
+        if not isinstance(signal, Series):
+            out[axis] = None
+            continue
+        d = strong_motion.measured(np.asarray(signal.values, float), signal.dt)
+        least = r.strong_min_s
+        out[axis] = {**d, "strong_motion_s": d["bracketed_25_s"], "strong_motion_min_s": least,
+                     "strong_motion_pass": None if least is None else d["bracketed_25_s"] >= least}
+    return out
+
+
+def _made_motions(deck, req: Request, folder: Path, notes: list) -> GivenMotions:
+    """Spectrum-compatible motions made, written into ``folder`` (motions/, trs.csv,
+    trs_fine.csv, records.csv, motions.json) and checked."""
+    made = matching.make_motions(req.rrs, req.motions, req.duration, req.motion_dt, req.seed, vertical=req.vertical)
+    (folder / "motions").mkdir()
+    mark = f"# rbhyst qualify {deck.source.name if deck.source else 'deck'}"
+    decks, checks = [], {axis: [] for axis in req.rrs}
+    for m in made:
+        files = {}
+        for axis in m.records:
+            files[axis] = folder / "motions" / matching.record_name(m, axis)
+            files[axis].write_text(matching.record_text(m, axis, mark), encoding="utf-8")
+            checks[axis].append((f"TRS, motion {m.number}", m.records[axis].check))
+        decks.append((f"motion {m.number}", _deck_with_motion(deck, _support(files), m.duration, notes)))
+    matching.write_tables(folder, made)
+    summary = matching.motions_summary(made, req.rrs, req.standard)
+    (folder / "motions.json").write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")
+    facts = [{**m, "files": {a: f"motions/{f}" for a, f in m["files"].items()}} for m in summary["motions"]]
+    records = [r for m in made for r in m.records.values()]
+    return GivenMotions(decks, facts, checks,
+                        all(r.check.in_band for r in records) and
+                        all(m.correlation is None or abs(m.correlation) < matching.MAX_CORRELATION for m in made),
+                        all(r.check.peak_ok for r in records), all(r.strong_ok for r in records))
 
 
 def _deck_trs(excitation, duration: float, rrs: dict[str, RRS]) -> dict:
@@ -446,6 +492,9 @@ def verdict_lines(v: Verdict) -> list[str]:
         lines.append(f"fail: the motions' TRS is not within the RRS's band ({where})")
     if not d["trs"]["peak_pass"]:
         lines.append(f"fail: a motion's peak acceleration is below the least the RRS asks for ({where})")
+    if not d["trs"].get("strong_motion_pass", True):
+        lines.append("fail: a motion's strong motion is shorter than the RRS asks for (qualification.json, "
+                     "motions.<k>.axes or .strong_motion)")
     acc = d["accuracy"]
     if not acc["pass"]:
         worst = acc["estimated_error"]
