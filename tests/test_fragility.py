@@ -243,3 +243,28 @@ def test_the_intensity_measures_come_from_the_motions(tmp_path):
     # targets of PGA: the level itself
     plan = load_sweep(project(tmp_path / "c", {"intensity": "pga_g"}, scale={"pga_g": [0.2, 0.4]})).fragility
     assert sorted(set(plan.intensity.values.values())) == [0.2, 0.4]
+
+
+def test_resamples_that_separate_count_as_steps_in_the_intervals():
+    """A resample whose stripes separate the cases is a step (beta -> 0), not a resample to drop:
+    dropping them (12 % here) made the 5th percentile of beta a percentile of the others."""
+    from rbhyst.analyses.fragility import bootstrap, fit_lognormal, probabilities
+
+    x = np.array([1.0, 2.0, 3.0, 4.0])
+    outcomes = [np.zeros(10), np.r_[np.ones(1), np.zeros(9)], np.r_[np.ones(9), np.zeros(1)], np.ones(10)]
+    n = np.array([10.0] * 4)
+    z = np.array([o.sum() for o in outcomes])
+    fitted = fit_lognormal(x, n, z)
+    theta, beta = bootstrap(x, outcomes, fitted, 2000, np.random.default_rng(7))
+    step = beta == 0.0
+    # stripe 2 resampled to no case reaching (0.9^10 of the time) or stripe 3 to every case
+    # (as often) separates them: the step lies at the mixed stripe, or between 2 and 3 if both
+    clean = 0.9 ** 10
+    assert step.mean() == pytest.approx(1 - (1 - clean) ** 2, abs=0.03)
+    both = np.isclose(theta, np.sqrt(6.0)) & step
+    assert both.mean() == pytest.approx(clean ** 2, abs=0.02)
+    assert np.all(np.isclose(theta[step], 2.0) | np.isclose(theta[step], 3.0) | both[step])
+    assert np.all(beta[~step] > 0)
+    assert np.percentile(beta[np.isfinite(beta)], 5) == 0.0  # honest: the data allow a step
+    p = probabilities(np.array([2.0, 2.5, 3.0]), theta[both][:1], beta[both][:1])
+    assert p.tolist() == [[0.0, 1.0, 1.0]]

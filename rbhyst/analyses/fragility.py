@@ -224,13 +224,34 @@ def log_likelihood(x, n, z, theta: float, beta: float) -> float:
 def bootstrap(x, outcomes: list[np.ndarray], fitted: tuple[float, float], replicates: int,
               rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
     """theta and beta of ``replicates`` resamples, each stripe's cases drawn with replacement
-    from its own (NaN where a resample identifies no curve)."""
+    from its own. A resample whose stripes separate the cases that reach the limit from those
+    that do not (some of each) has its likelihood's supremum at a step, beta -> 0 with theta
+    anywhere in the gap: it counts as beta = 0 at the gap's geometric middle, so that the
+    intervals are percentiles of every such resample, not of the others alone; NaN where a
+    resample has no case or every case reaching the limit (no curve at all)."""
     x = np.asarray(x, dtype=float)
     n = np.array([len(o) for o in outcomes], dtype=float)
     z = np.empty((replicates, len(outcomes)))
     for j, o in enumerate(outcomes):
         z[:, j] = o[rng.integers(0, len(o), size=(replicates, len(o)))].sum(axis=1) if len(o) else 0.0
-    return fit_many(x, n, z, fitted)
+    theta, beta = fit_many(x, n, z, fitted)
+    total = z.sum(axis=1)
+    step = separated(x, n, z) & (total > 0) & (total < n.sum())
+    below = np.where(z < n, x, -np.inf).max(axis=1)
+    above = np.where(z > 0, x, np.inf).min(axis=1)
+    theta[step] = np.sqrt(below[step] * above[step])
+    beta[step] = 0.0
+    return theta, beta
+
+
+def probabilities(x: np.ndarray, theta: np.ndarray, beta: np.ndarray) -> np.ndarray:
+    """P(reach | x) for each (theta, beta) (rows) at each x (columns); beta = 0: the step at theta."""
+    from scipy.stats import norm
+
+    with np.errstate(divide="ignore", invalid="ignore"):
+        z = np.log(x[None, :] / theta[:, None]) / beta[:, None]
+    step = np.where(x[None, :] >= theta[:, None], 1.0, 0.0)
+    return np.where(beta[:, None] > 0.0, norm.cdf(z), step)
 
 
 def separated(x: np.ndarray, n: np.ndarray, z: np.ndarray) -> np.ndarray:
@@ -336,7 +357,9 @@ class FragilityPlan:
             "seed": o.seed,
             "intervals": f"percentiles {50 * (1 - o.confidence):g} and {50 * (1 + o.confidence):g} of {o.bootstrap} "
                          "bootstrap resamples of the cases within each stripe (numpy.random.default_rng([seed, k]) "
-                         "for the k-th curve); the band is pointwise",
+                         "for the k-th curve); a resample whose stripes separate the cases counts as the step it "
+                         "is (beta 0, theta at the gap's geometric middle), one with no case or every case reaching "
+                         "the limit is left out and counted; the band is pointwise",
             "files": {CSV_FILE: "one row per limit state and vary combination", STRIPES_FILE:
                       "one row per limit state, vary combination and intensity level"},
         }
@@ -359,7 +382,8 @@ class Curve:
     beta: float | None = None
     median_ci: tuple[float, float] | None = None
     beta_ci: tuple[float, float] | None = None
-    identified: int = 0  # bootstrap resamples that identified a curve
+    identified: int = 0  # bootstrap resamples that identified a curve (steps among them)
+    steps: int = 0  # ... of them a step (the cases separated: beta 0)
     grid: np.ndarray | None = None
     band: tuple[np.ndarray, np.ndarray] | None = None  # pointwise P bounds on grid
     p_bounds: tuple[np.ndarray, np.ndarray] | None = None  # at x
@@ -434,18 +458,21 @@ def _fit(c: Curve, plan: FragilityPlan, rng: np.random.Generator) -> None:
         theta, beta = bootstrap(c.x[keep], outcomes, (c.median, c.beta), o.bootstrap, rng)
         good = np.isfinite(theta)
         c.identified = int(good.sum())
+        c.steps = int(np.sum(beta[good] == 0.0))
+        if c.steps:
+            c.notes.append(f"{c.steps} of {o.bootstrap} bootstrap resamples separate the cases that reach the limit "
+                           "from those that do not (a step: beta 0, theta at the gap's geometric middle) and count "
+                           "so in the intervals")
         if c.identified < o.bootstrap:
-            c.notes.append(f"{o.bootstrap - c.identified} of {o.bootstrap} bootstrap resamples identified no curve "
-                           "and are left out of the intervals")
+            c.notes.append(f"{o.bootstrap - c.identified} of {o.bootstrap} bootstrap resamples have no case or every "
+                           "case reaching the limit and are left out of the intervals")
         if c.identified >= MIN_IDENTIFIED * o.bootstrap:
             q = (50 * (1 - o.confidence), 50 * (1 + o.confidence))
             c.median_ci = tuple(float(v) for v in np.percentile(theta[good], q))
             c.beta_ci = tuple(float(v) for v in np.percentile(beta[good], q))
-            from scipy.stats import norm
 
             def bounds(x):
-                p = norm.cdf(np.log(x[None, :] / theta[good][:, None]) / beta[good][:, None])
-                lo, hi = np.percentile(p, q, axis=0)
+                lo, hi = np.percentile(probabilities(x, theta[good], beta[good]), q, axis=0)
                 return lo, hi
 
             c.band = bounds(c.grid)

@@ -152,10 +152,14 @@ def _spectra(q: dict) -> str:
                 ["check range [Hz]", f"{r['check_range_hz'][0]:g} to {r['check_range_hz'][1]:g}"],
                 ["least peak acceleration [g]", num(r.get("peak_min_g"), f"{p}.peak_min_g")]]
         out.append(f"<h3>{esc(axis)}: {esc(r.get('name', ''))}</h3>" + table(["", ""], rows))
-        freq, sa = r.get("frequency_hz", []), r.get("sa_g", [])
+        freq, sa, key = r.get("frequency_hz", []), r.get("sa_g", []), ("frequency_hz", "sa_g")
+        if r.get("formula"):  # a standard's formulas: them, and their breakpoints (the curve is tabulated)
+            out.append(f"<p>{esc(r['formula'])}</p>")
+            freq, sa, key = r.get("breakpoints_hz", []), r.get("breakpoints_sa_g", []), ("breakpoints_hz",
+                                                                                         "breakpoints_sa_g")
         if 0 < len(freq) <= RRS_POINTS_SHOWN:
             out.append(table(["RRS point", "frequency [Hz]", "spectral acceleration [g]"],
-                             [[str(k + 1), num(f, f"{p}.frequency_hz.{k}"), num(a, f"{p}.sa_g.{k}")]
+                             [[str(k + 1), num(f, f"{p}.{key[0]}.{k}"), num(a, f"{p}.{key[1]}.{k}")]
                               for k, (f, a) in enumerate(zip(freq, sa))], {1, 2}))
         elif freq:
             out.append(f'<p class="muted">The RRS has {len(freq)} points, {freq[0]:g} to {freq[-1]:g} Hz.</p>')

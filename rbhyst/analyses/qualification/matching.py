@@ -335,7 +335,7 @@ def motion_problems(rrs: dict[str, RRS], duration: float, dt: float, strong: flo
     top = max(r.check_range[1] for r in rrs.values())
     if top > MAX_CHECK_FRACTION / dt:
         problems.append(f"{keys['dt']}: {dt:g} s samples at {1 / dt:.4g} Hz, too coarse to carry the RRS up to "
-                        f"{top:.4g} Hz: {keys['dt']} {MAX_CHECK_FRACTION / top:.3g} would")
+                        f"{top:.4g} Hz: {keys['dt']} {MAX_CHECK_FRACTION / top:.3g} or finer carries it")
     low = min(r.check_range[0] for r in rrs.values())
     if duration < 8.0 / low:
         problems.append(f"{keys['duration']}: {duration:g} s holds only {duration * low:.3g} cycles of the lowest "

@@ -112,6 +112,8 @@ class RRS:
     #: sa (m/s2) at f (Hz) where a standard gives the curve by formulas (``frequency_hz`` and
     #: ``sa`` then tabulate it at its breakpoints); None: log-log between the breakpoints
     shape: Callable | None = None
+    #: the formulas ``shape`` follows, as text
+    formula: str = ""
 
     def __call__(self, f) -> np.ndarray:
         """sa (m/s2) at frequencies f (Hz)."""
@@ -130,9 +132,22 @@ class RRS:
         return self.sa / G
 
     def describe(self) -> dict:
+        """The RRS as checked: its points, log-log between them. A standard's formulas (``shape``)
+        are tabulated on the fine grid over its breakpoints' range and at them (log-log between
+        the points reads them within 1e-5), their text and breakpoints beside."""
+        if self.shape is None:
+            f, extra = self.frequency_hz, {}
+        else:
+            # the breakpoints, and a point just below each, so that its kinks and steps (IEEE 693's
+            # at 1.1 Hz) read as they are
+            inner = self.frequency_hz[1:-1]
+            f = np.unique(np.concatenate([fine_grid(float(self.frequency_hz[0]), float(self.frequency_hz[-1])),
+                                          inner, inner * (1.0 - 1e-9)]))
+            extra = {"formula": self.formula, "breakpoints_hz": [float(x) for x in self.frequency_hz],
+                     "breakpoints_sa_g": [float(a) for a in self.sa_g]}
         return {"name": self.name, "damping": self.damping, "check_range_hz": list(self.check_range),
-                "band": list(self.band), "frequency_hz": [float(f) for f in self.frequency_hz],
-                "sa_g": [float(a) for a in self.sa_g], "source": self.source,
+                "band": list(self.band), "frequency_hz": [float(x) for x in f],
+                "sa_g": [float(a) for a in self(f) / G], **extra, "source": self.source,
                 "peak_min_ratio": self.zpa_ratio, "strong_motion_min_s": self.strong_min_s,
                 "peak_min_g": None if self.peak_min is None else self.peak_min / G}
 
@@ -204,6 +219,14 @@ def ieee693_problems(level, damping, level_key: str = "--level", damping_key: st
     return problems
 
 
+def ieee693_formula(level: str, damping: float, factor: float = 1.0) -> str:
+    """IEEE 693's spectrum as text, with its beta and level factor."""
+    scale = IEEE693_LEVELS[level] * factor
+    return (f"{scale:g} x [2.288 beta f below 1.1 Hz; 2.5 beta from 1.1 to 8 Hz; (26.4 beta - 10.56) / f - 0.8 beta "
+            f"+ 1.32 from 8 to 33 Hz; 1.0 above 33 Hz] g, f in Hz, beta = (3.21 - 0.68 ln(100 zeta)) / 2.1156 = "
+            f"{ieee693_beta(damping):.6g} at zeta = {damping:g}")
+
+
 def ieee693(level: str, damping: float | None = None) -> dict[str, RRS]:
     """IEEE 693's horizontal (x1) and vertical (x2, 80 % of it) RRS of the ``level``
     (high or moderate) performance level spectrum, drawn at ``damping`` (5 % by default)."""
@@ -219,7 +242,8 @@ def ieee693(level: str, damping: float | None = None) -> dict[str, RRS]:
             return factor * G * ieee693_sa_g(x, level, damping)
         out[axis] = RRS(f"IEEE 693 {level} performance level, {what}", damping, f, shape(f), IEEE693_RANGE,
                         IEEE693_BAND, f"IEEE Std 693-2005, Figure A.{1 if level == 'high' else 2}"
-                        + ("" if axis == "x1" else ", vertical 80 %"), IEEE693_ZPA_RATIO, IEEE693_STRONG, shape)
+                        + ("" if axis == "x1" else ", vertical 80 %"), IEEE693_ZPA_RATIO, IEEE693_STRONG, shape,
+                        ieee693_formula(level, damping, factor))
     return out
 
 

@@ -501,7 +501,8 @@ def verdict_lines(v: Verdict) -> list[str]:
         lines.append("fail: a run cannot vouch for its accuracy: " +
                      ("no error estimate" if worst is None else
                       f"estimated error {100 * worst:.2g} % (at most {100 * acc['warn_error']:g} %)") +
-                     "; a smaller --dt or --tolerance would")
+                     "; a smaller --dt or --tolerance, or no --integrator (rbhyst then chooses the step), "
+                     "would bring it within")
     for w in d["warnings"]:
         lines.append(f"fail: warning: {w}")
     least = min(v.criteria, key=lambda c: c["margin"]) if v.criteria else None
