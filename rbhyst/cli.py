@@ -747,13 +747,18 @@ def make_motion(
                                              "records.csv, trs.png, motions.json.")],
     rrs: Annotated[Optional[str], typer.Option(help="ac156, ieee693, or a CSV RRS for x1 (frequency_hz and a value "
                                                     "column with its unit: sa_g, sa_m_s2).")] = None,
-    rrs_x2: Annotated[Optional[str], typer.Option("--rrs-x2", help="A CSV RRS for x2 (vertical), with an RRS "
-                                                                   "file for x1.")] = None,
+    rrs_x2: Annotated[Optional[str], typer.Option("--rrs-x2", help="A CSV RRS for x2 (vertical; with --axes 3 the "
+                                                                   "second horizontal), with an RRS file for "
+                                                                   "x1.")] = None,
+    rrs_x3: Annotated[Optional[str], typer.Option("--rrs-x3", help="With --axes 3: a CSV RRS for x3, the "
+                                                                   "vertical.")] = None,
     rrs_damping: Annotated[Optional[float], typer.Option(help="The damping ratio the RRS files are drawn for "
                                                               "(ieee693: 0.05 by default).")] = None,
     sds: Annotated[Optional[float], typer.Option(help="AC156: S_DS, in g.")] = None,
     z_over_h: Annotated[Optional[float], typer.Option(help="AC156: z/h, 0 at grade to 1 at the roof.")] = None,
     level: Annotated[Optional[str], typer.Option(help="IEEE 693: the performance level, high or moderate.")] = None,
+    axes: Annotated[int, typer.Option(help="2: x1 horizontal and x2 vertical (a deck in the plane); 3: x1 and x2 "
+                                           "horizontal, x3 vertical (a triaxial table, a deck in space).")] = 2,
     duration: Annotated[float, typer.Option(help="Length in s (AC156, IEEE 693: 30 s, 20 s of them strong "
                                                  "motion).")] = 30.0,
     dt: Annotated[float, typer.Option(help="Sampling step in s.")] = 0.005,
@@ -773,16 +778,22 @@ def make_motion(
     from rbhyst.analyses.qualification.rrs import requested_rrs
     from rbhyst.files.outdir import staged_directory
 
-    keys = {"rrs": "--rrs", "rrs_x2": "--rrs-x2", "damping": "--rrs-damping", "sds": "--sds", "z_over_h": "--z-over-h",
-            "level": "--level", "duration": "--duration", "dt": "--dt"}
+    keys = {"rrs": "--rrs", "rrs_x2": "--rrs-x2", "rrs_x3": "--rrs-x3", "damping": "--rrs-damping", "sds": "--sds",
+            "z_over_h": "--z-over-h", "level": "--level", "duration": "--duration", "dt": "--dt"}
     with user_errors():
-        spectra, standard = requested_rrs(rrs, rrs_x2, rrs_damping, sds, z_over_h, Path.cwd(), keys, level)
+        if axes not in (2, 3):
+            raise InputError(f"--axes: {axes}: 2 (x1 horizontal, x2 vertical) or 3 (x1, x2 horizontal, x3 vertical)")
+        if rrs_x3 is not None and axes != 3:
+            raise InputError("--rrs-x3: only with --axes 3 (with two axes the vertical is x2: --rrs-x2)")
+        spectra, standard = requested_rrs(rrs, rrs_x2, rrs_damping, sds, z_over_h, Path.cwd(), keys, level,
+                                          rrs_x3, space=axes == 3)
         problems = matching.motion_problems(spectra, duration, dt, None, standard, keys)
         if problems:
             raise InputError(problems)
-        made = matching.make_motions(spectra, motions, duration, dt, seed)
-        options = {"--rrs": rrs, "--rrs-x2": rrs_x2, "--rrs-damping": rrs_damping, "--sds": sds,
-                   "--z-over-h": z_over_h, "--level": level, "--duration": duration, "--dt": dt, "--seed": seed}
+        made = matching.make_motions(spectra, motions, duration, dt, seed, vertical="x3" if axes == 3 else "x2")
+        options = {"--rrs": rrs, "--rrs-x2": rrs_x2, "--rrs-x3": rrs_x3, "--rrs-damping": rrs_damping, "--sds": sds,
+                   "--z-over-h": z_over_h, "--level": level, "--axes": axes if axes != 2 else None,
+                   "--duration": duration, "--dt": dt, "--seed": seed}
         mark = f"{MOTION_MARK} " + " ".join(f"{k} {shlex.quote(str(v))}" for k, v in options.items() if v is not None)
         with staged_directory(out) as tmp:
             for m in made:
@@ -803,8 +814,12 @@ def make_motion(
             say(f"motion {m.number} {axis}: TRS from {r.check.said()} at {len(r.check.fine_frequency)} frequencies "
                 f"({r.iterations} iterations); peak {float(abs(r.acc_g).max()):.3g} g{least}; strong motion "
                 f"{r.strong:.3g} s{strong}")
-        if m.correlation is not None:
-            say(f"motion {m.number}: correlation of x1 and x2 {m.correlation:+.3f}")
+        coherence = m.coherences()
+        for pair, c in m.correlations.items():
+            a, b = pair.split("_")
+            say(f"motion {m.number}: correlation of {a} and {b} {c:+.3f}; coherence {coherence[pair]['mean']:.3f} "
+                f"on average over {coherence[pair]['band_hz'][0]:.3g}-{coherence[pair]['band_hz'][1]:.3g} Hz "
+                f"(largest {coherence[pair]['max']:.3f})")
     say(f"wrote {out}")
 
 

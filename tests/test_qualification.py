@@ -309,6 +309,36 @@ def test_a_dip_between_the_standards_points_fails_the_check():
     assert s["outside_fine_hz"] == [[f[~points][40], f[~points][40]]]
 
 
+def test_three_axes_for_a_triaxial_table(tmp_path):
+    from independent_spectra import octave_grid, trs
+
+    out = tmp_path / "m3"
+    code, err = invoke("make-motion", out, "--rrs", "ac156", "--sds", "1.0", "--z-over-h", "0.5", "--axes", "3",
+                       "--seed", "2", "--no-plots")
+    assert code == 0, err
+    rrs = {"x1": ac156(1.0, 0.5)["x1"], "x2": ac156(1.0, 0.5)["x1"], "x3": ac156(1.0, 0.5)["x2"]}
+    acc = {axis: _acc_g(out / f"m1_{axis}.csv") for axis in ("x1", "x2", "x3")}
+    for axis, (dt, a) in acc.items():
+        f = octave_grid(1.3, 33.3)
+        ratio = trs(a * G, dt, f, 0.05) / rrs[axis](f)
+        assert 0.9 <= ratio.min() and ratio.max() <= 1.3, axis
+    for a, b in (("x1", "x2"), ("x1", "x3"), ("x2", "x3")):
+        assert abs(np.corrcoef(acc[a][1], acc[b][1])[0, 1]) < 0.3
+    m = json.loads((out / "motions.json").read_text())["motions"][0]
+    assert set(m["correlations"]) == set(m["coherence"]) == {"x1_x2", "x1_x3", "x2_x3"}
+    assert all(0.0 <= c["mean"] < 0.15 and c["band_hz"] == [1.3, 33.3] for c in m["coherence"].values())
+    assert m["files"] == {axis: f"m1_{axis}.csv" for axis in ("x1", "x2", "x3")}
+    assert (out / "m1_x3.csv").read_text().splitlines()[0].endswith("motion 1, x3 (vertical)")
+    assert any(line.startswith("motion 1: correlation of x2 and x3 ") for line in err.splitlines())
+    code, err = invoke("make-motion", tmp_path / "no", "--rrs", "a.csv", "--rrs-x3", "b.csv", "--rrs-damping", "0.05")
+    assert code == 2 and errors(err) == [
+        "error: --rrs-x3: only with --axes 3 (with two axes the vertical is x2: --rrs-x2)"]
+    code, err = invoke("make-motion", tmp_path / "no", "--rrs", "ac156", "--sds", "1", "--z-over-h", "0", "--axes", "4")
+    assert code == 2 and errors(err) == [
+        "error: --axes: 4: 2 (x1 horizontal, x2 vertical) or 3 (x1, x2 horizontal, x3 vertical)"]
+    assert not (tmp_path / "no").exists()
+
+
 def test_the_same_seed_gives_the_same_bits(motion, tmp_path):
     code, err = invoke("make-motion", tmp_path / "again", *AC156_OPTIONS, "--no-plots")
     assert code == 0, err
