@@ -573,7 +573,7 @@ def test_every_motion_is_judged_and_the_mean_is_the_demand_only_where_asked(tmp_
     c = next(c for c in q["criteria"] if c["item"] == "top x1")
     assert q["statistic"]["used"] == "mean" and c["demand"] == pytest.approx(np.mean(per), rel=1e-12)
     assert c["pass"] and c["over_capacity"] == over and c["per_motion_pass"] == [v <= cap for v in per]
-    note = [line for line in err.splitlines() if line.startswith("note: acceleration top x1: over ")]
+    note = [line for line in err.splitlines() if line.startswith(f"note: acceleration top x1: over {cap:.4g} g in ")]
     assert len(note) == 1 and all(m in note[0] for m in over) and "the mean, the verdict's statistic" in note[0]
     # the default statistic: the largest, so the motions over capacity fail the deck
     code, err = invoke("qualify", deck, "--out", tmp_path / "max", "--no-plots")
@@ -581,8 +581,9 @@ def test_every_motion_is_judged_and_the_mean_is_the_demand_only_where_asked(tmp_
     q = json.loads((tmp_path / "max" / "qualification.json").read_text())
     c = next(c for c in q["criteria"] if c["item"] == "top x1")
     assert q["statistic"]["asked"] == "max" and c["demand"] == max(per) and not c["pass"] and c["over_capacity"] == over
-    assert any(line.startswith("fail: acceleration top x1: over ") and all(m in line for m in over)
-               for line in err.splitlines())
+    fail = [line for line in err.splitlines() if line.startswith("fail: acceleration top x1: ")]
+    assert len(fail) == 1 and f"(the max over the motions; over {cap:.4g} g in {len(over)} of 7 motions: " in fail[0]
+    assert all(m in fail[0] for m in over)
 
 
 def test_a_demand_beyond_its_capacity_fails_with_exit_1(tmp_path):
@@ -700,3 +701,54 @@ def test_qualify_mistakes_are_one_line_each_and_nothing_is_written(tmp_path):
     code, err = invoke("qualify", write_deck(tmp_path, cab, name="both"))
     assert code == 2 and err.splitlines() == [
         "error: qualify.rrs: not with qualify.standard: give a standard or RRS files"]
+
+
+# ---------------------------------------------------------------- after the motion
+
+
+def test_a_peak_in_the_free_vibration_after_the_motion_counts(tmp_path):
+    """A record that stops while the body swings: the peaks come after it, and a run that
+    stopped with the record (as qualification runs did) missed them."""
+    import rbhyst
+
+    t = np.arange(0.0, 1.02 + 1e-9, 0.001)
+    pulse = np.where(t >= 1.0, 2.0 * np.sin(np.pi * (t - 1.0) / 0.02), 0.0)  # a 20 ms half-sine, last
+    (tmp_path / "pulse.csv").write_text("time_s,acceleration_g\n" + "\n".join(f"{a:.6f},{b:.9e}" for a, b in
+                                                                               zip(t, pulse)) + "\n")
+    deck = _cabinet(tmp_path, {"standard": "ac156", "sds": 1.0, "z_over_h": 0.0, "motions": "deck",
+                               "acceleration_limit_g": {"top": 30.0}},
+                    excitation={"support": {"x1": {"file": "pulse.csv", "units": "g"}}})
+    code, err = invoke("qualify", deck, "--out", tmp_path / "q", "--no-plots")
+    q = json.loads((tmp_path / "q" / "qualification.json").read_text())
+    run = q["runs"][0]
+    s = json.loads((tmp_path / "q" / "run_1" / "summary.json").read_text())
+    f1 = s["modes"]["frequencies_hz"][0]
+    assert run["motion_end_s"] == pytest.approx(1.02) and run["decayed"], run
+    assert run["free_vibration_s"] == pytest.approx(max(2.0, 10.0 / f1), abs=2e-3)
+    assert s["analysis"]["duration_s"] == pytest.approx(1.02 + run["free_vibration_s"], abs=1e-9)
+    peak_at = max(s["extremes"]["u1_m"].items(), key=lambda kv: abs(kv[1]) if "time" not in kv[0] else 0)[0]
+    assert s["extremes"]["u1_m"][f"time_of_{peak_at}_s"] > 1.02  # the peak is in the free vibration
+    # ... which the same deck run to the record's end alone did not see, and a run twice as long
+    # after it sees no larger
+    cab = rbhyst.load_deck(deck)
+    short = rbhyst.run(cab.with_values({"analysis.duration": 1.02})).summary()
+    long = rbhyst.run(cab.with_values({"analysis.duration": 1.02 + 2 * run["free_vibration_s"]})).summary()
+    assert short["peaks"]["u1_m"] < 0.9 * s["peaks"]["u1_m"]
+    assert long["peaks"]["u1_m"] == pytest.approx(s["peaks"]["u1_m"], rel=1e-6)
+    assert long["peaks"]["top_at1_m_s2"] == pytest.approx(s["peaks"]["top_at1_m_s2"], rel=1e-6)
+    assert "free_vibration" in q and "10 periods" in q["free_vibration"]["rule"]
+
+
+def test_decay_is_judged_on_the_responses_growth_not_the_inputs_nor_the_energies():
+    from rbhyst.analyses.qualification.free_vibration import grown, tail_s
+
+    t = np.linspace(0.0, 10.0, 1001)
+    cols = {"u1_m": np.sin(t) * np.exp(-t),            # decays: its peak is early
+            "u2_m": 0.002 * (1 - np.exp(-t)),          # settles: grows 0.7 % after 5 s
+            "u3_m": 1e-12 * t,                         # at rest (rounding)
+            "ag1_m_s2": np.where(t > 9, 3.0, 0.0),     # the input, not a response
+            "E_input_J": t}                            # accumulates
+    assert grown(t, cols, 5.0, 0.01) == []
+    got = grown(t, cols, 5.0, 0.001)
+    assert [c for c, _ in got] == ["u2_m"] and got[0][1] == pytest.approx((np.exp(-5.0) - np.exp(-10.0)) / (1 - np.exp(-5.0)), rel=1e-9)
+    assert tail_s([0.0, 0.5, 7.0]) == 20.0 and tail_s([20.0]) == 2.0 and tail_s([]) == 2.0

@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from rbhyst.analyses.qualification import matching, strong_motion
+from rbhyst.analyses.qualification import free_vibration, matching, strong_motion
 from rbhyst.analyses.qualification.rrs import PLANE_AXES, SPACE_AXES, STANDARDS, G, RRS, requested_rrs
 from rbhyst.errors import InputError
 
@@ -166,8 +166,9 @@ def _limit_problems(deck, values: dict, space: bool = False) -> list[str]:
 
 
 def _deck_with_motion(deck, support: dict | None, duration: float | None = None, notes: list | None = None):
-    """A copy of the deck driven by ``support`` (None: its own), whose analysis covers the
-    motion's ``duration`` (a shorter analysis.duration is lengthened, with a note)."""
+    """A copy of the deck driven by ``support`` (None: its own), whose analysis lasts at least
+    ``duration`` (the motion and its free vibration; a shorter analysis.duration is lengthened,
+    with a note; None analysis.duration: the motion's end)."""
     from rbhyst.model.deck import parse_deck
 
     data = deck.model_dump(mode="python", exclude_unset=True)
@@ -176,11 +177,12 @@ def _deck_with_motion(deck, support: dict | None, duration: float | None = None,
         ex["support"] = support
         data["excitation"] = ex
     own = data["analysis"].get("duration")
-    if duration is not None and own is not None and own < duration:
+    if duration is not None and (own is None or own < duration):
         data["analysis"] = {**data["analysis"], "duration": duration}
+    if duration is not None and own is not None and own < duration:
         if notes is not None and not notes:
-            notes.append(f"analysis.duration: {own:g} s is shorter than the motions ({duration:g} s): "
-                         "each run covers its whole motion")
+            notes.append(f"analysis.duration: {own:g} s is shorter than the motions and their free vibration "
+                         f"({duration:g} s): each run covers them")
     copy = parse_deck(data)
     copy._source = deck.source
     return copy
@@ -213,7 +215,6 @@ def qualify(deck, req: Request, folder: Path, integrator: str | None = None, dt:
     Long because it is the qualification's pipeline read top to bottom: the motions, their
     check, the runs, the criteria."""
     from rbhyst._version import __version__
-    from rbhyst.results.analysis import run_deck
     from rbhyst.results.writers import deck_as_run, write_summary
 
     folder = Path(folder).resolve()  # the runs' decks name the motions' files from their own folder
@@ -221,15 +222,25 @@ def qualify(deck, req: Request, folder: Path, integrator: str | None = None, dt:
     notes: list[str] = []
     given = _own_motion(deck, req) if req.motions == "deck" else _made_motions(deck, req, folder, notes)
     decks, motion_facts, checks = given.decks, given.facts, given.checks
+    afters: list[dict] = []
     trs_ok, peak_ok, band_ok, strong_ok = given.ok, given.peak_ok, given.band_ok, given.strong_ok
-    for k, (label, d) in enumerate(decks, start=1):
+    tail = None
+    for k, (label, support, end) in enumerate(decks, start=1):
         if say is not None:
             say(f"running {label} ({k} of {len(decks)})")
-        result = run_deck(d, keep=False, integrator=integrator, dt=dt, tolerance=tolerance)
-        s = result.summary()
+        if tail is None:  # the structure is every motion's: its modes, once
+            tail = free_vibration.tail_s(_lowest_frequencies(_deck_with_motion(deck, support)))
+        result, s, after = _run_to_rest(deck, support, end, tail, dict(integrator=integrator, dt=dt,
+                                                                       tolerance=tolerance))
         (folder / f"run_{k}").mkdir()
         write_summary(result, folder / f"run_{k}" / "summary.json")  # as rbhyst run writes it
         runs.append((label, s))
+        afters.append({"motion": label, **after})
+        if after.get("decayed") is False:
+            column, g = max(after["grown"].items(), key=lambda kv: kv[1])
+            notes.append(f"{label}: the response had not decayed {after['free_vibration_s']:.3g} s after the motion "
+                         f"(the peak of {column} grew by {100 * g:.3g} % in its last half): its peaks are those of "
+                         "the time it ran")
     criteria = _criteria(deck, req, runs)
     accuracy = _accuracy(runs, deck.analysis.warn_error)
     warnings = [f"{label}: {w}" for label, s in runs for w in s["warnings"]]
@@ -256,7 +267,9 @@ def qualify(deck, req: Request, folder: Path, integrator: str | None = None, dt:
         "accuracy": accuracy,
         "warnings": warnings,
         "notes": notes,
-        "runs": [{"motion": label, "summary": f"run_{k}/summary.json"} for k, (label, _) in enumerate(runs, start=1)],
+        "runs": [{"motion": label, "summary": f"run_{k}/summary.json", **after}
+                 for k, ((label, _), after) in enumerate(zip(runs, afters), start=1)],
+        "free_vibration": {"rule": free_vibration.RULE},
         # the deck as given, with the command's overrides (each made motion takes excitation.support's place)
         "deck_as_run": deck_as_run(deck, integrator=integrator, dt=dt, tolerance=tolerance),
     }
@@ -274,7 +287,7 @@ class GivenMotions:
     """The motions a qualification runs: each one's deck, its facts, its TRS checks per axis and
     whether they meet the RRS's rules."""
 
-    decks: list  # (label, deck)
+    decks: list  # (label, support (None: the deck's own), the motion's end in s or None)
     facts: list[dict]
     checks: dict  # axis -> [(label, Check)]
     band_ok: bool = True  # every TRS within its band (and made motions' components independent)
@@ -286,6 +299,37 @@ class GivenMotions:
         return self.band_ok and self.peak_ok and self.strong_ok
 
 
+def _lowest_frequencies(deck) -> tuple[float, ...]:
+    """The natural frequencies (Hz) of the deck's initial system (rbhyst.solve.modes)."""
+    from rbhyst.model.system import assemble
+    from rbhyst.solve.modes import initial_modes
+
+    return initial_modes(assemble(deck, deck.base)).frequencies_hz
+
+
+def _run_to_rest(deck, support, end: float | None, tail: float, options: dict):
+    """The run of the deck on ``support`` through its motion (ending at ``end``) and the free
+    vibration after it (rbhyst.analyses.qualification.free_vibration): the result, its summary
+    and what the tail was."""
+    from rbhyst.results.analysis import run_deck
+
+    if end is None:  # no end to the motion: the deck's own duration, no tail
+        result = run_deck(_deck_with_motion(deck, support), keep=False, **options)
+        return result, result.summary(), {}
+    for attempt in range(free_vibration.TAIL_TRIES):
+        d = _deck_with_motion(deck, support, end + tail)
+        result = run_deck(d, keep=True, **options)  # (the rows: the peaks before and after half the tail)
+        s = result.summary()
+        stop = s["analysis"]["duration_s"]
+        columns = {c: result.column(c) for c in result.columns if c != "time_s"}
+        growth = free_vibration.grown(result.time, columns, end + 0.5 * (stop - end), d.analysis.warn_error)
+        if not growth or attempt == free_vibration.TAIL_TRIES - 1:
+            break
+        tail *= free_vibration.TAIL_GROWTH
+    return result, s, {"motion_end_s": end, "free_vibration_s": stop - end, "decayed": not growth,
+                       "grown": {c: g for c, g in growth}}
+
+
 def _own_motion(deck, req: Request) -> GivenMotions:
     """The deck's own excitation.support, checked against the RRS."""
     from rbhyst.model.system import assemble
@@ -294,7 +338,8 @@ def _own_motion(deck, req: Request) -> GivenMotions:
     duration = deck.analysis.duration or system.excitation.duration or 0.0
     own = _deck_trs(system.excitation, duration, req.rrs)
     strong = _deck_strong_motion(system.excitation, req.rrs)
-    given = GivenMotions([("deck", _deck_with_motion(deck, None))],
+    end = system.excitation.duration  # (None: a signal without end, the deck's own duration)
+    given = GivenMotions([("deck", None, end)],
                          [{"number": 1, "source": "the deck's excitation.support",
                            "trs": {axis: c.summary() for axis, c in own.items()}, "strong_motion": strong}],
                          {axis: [("TRS, the deck's motion", c)] for axis, c in own.items()})
@@ -334,7 +379,7 @@ def _made_motions(deck, req: Request, folder: Path, notes: list) -> GivenMotions
             files[axis] = folder / "motions" / matching.record_name(m, axis)
             files[axis].write_text(matching.record_text(m, axis, mark), encoding="utf-8")
             checks[axis].append((f"TRS, motion {m.number}", m.records[axis].check))
-        decks.append((f"motion {m.number}", _deck_with_motion(deck, _support(files), m.duration, notes)))
+        decks.append((f"motion {m.number}", _support(files), m.duration))
     matching.write_tables(folder, made)
     summary = matching.motions_summary(made, req.rrs, req.standard)
     (folder / "motions.json").write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")
@@ -476,15 +521,15 @@ def verdict_lines(v: Verdict) -> list[str]:
     lines = [f"note: {n}" for n in d["notes"]]
     used = d["statistic"]["used"]
     for c in v.criteria:
+        several = len(c["per_motion"]) > 1
+        over = [x for x, ok in zip(c["per_motion"], c["per_motion_pass"]) if not ok]
+        each = (f"over {c['capacity']:.4g} {c['unit']} in {len(over)} of {len(c['per_motion'])} motions: "
+                + ", ".join(f"{m} {x:.4g} {c['unit']}" for m, x in zip(c["over_capacity"], over))) if over else ""
         if not c["pass"]:
             lines.append(f"fail: {c['label']}: {c['demand']:.4g} {c['unit']} > {c['capacity']:.4g} {c['unit']}"
-                         + (f" (the {used} over the motions)" if len(c["per_motion"]) > 1 else ""))
-        if c["over_capacity"] and len(c["per_motion"]) > 1:
-            over = [x for x, ok in zip(c["per_motion"], c["per_motion_pass"]) if not ok]
-            each = ", ".join(f"{m} {x:.4g}" for m, x in zip(c["over_capacity"], over))
-            lines.append(f"{'note' if c['pass'] else 'fail'}: {c['label']}: over {c['capacity']:.4g} {c['unit']} in "
-                         f"{len(c['over_capacity'])} of {len(c['per_motion'])} motions: {each} {c['unit']}"
-                         + (f"; the {used}, the verdict's statistic, is within" if c["pass"] else ""))
+                         + (f" (the {used} over the motions; {each})" if several else ""))
+        elif over and several:
+            lines.append(f"note: {c['label']}: {each}; the {used}, the verdict's statistic, is within")
     # where every checked frequency's TRS is: trs.csv and trs_fine.csv of made motions; the deck's own motion's in
     # qualification.json (its lowest and highest) and qualification.png
     where = "trs.csv, trs_fine.csv" if any("files" in m for m in d["motions"]) else "qualification.json, qualification.png"

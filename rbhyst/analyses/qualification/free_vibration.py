@@ -1,0 +1,73 @@
+"""The free vibration after a motion: how long a run goes on once its support is at rest, and
+whether its response has decayed by then.
+
+A body on its mounts keeps ringing after the table stops, and a peak of that free vibration
+counts as much as one during the motion (a test lab records until the table's and the
+specimen's motion have died out). A qualification run therefore continues after its motion
+for a tail of ``max(TAIL_MIN_S, TAIL_PERIODS / f1)``, f1 the lowest natural frequency of the
+initial system (rbhyst.solve.modes). The response counts as decayed when the second half of
+that tail raises no peak of the response (every output column but the ground's and the
+accumulating energies) by more than ``analysis.warn_error`` of it: going on would not change
+the figures beyond the accuracy asked of them. Where it does, the tail is doubled and the run
+made again, up to TAIL_TRIES runs; one that has still not decayed says so in a note, its peaks
+those of the time it ran. (A mount whose loading and unloading curves differ ratchets: the
+cabinet on the seed's wire rope sets settles by some 0.3 % of its vertical peak each time its
+free vibration doubles, which this rule lets pass.)
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+RULE = ("each run goes on after its motion for max(2 s, 10 periods of the initial system's lowest mode); the "
+        "response has decayed when the second half of that free vibration raises no peak by more than "
+        "analysis.warn_error, else the tail is doubled and the run made again (at most 3 runs); the peaks include "
+        "the free vibration")
+#: the tail after a motion: at least this long (s) ...
+TAIL_MIN_S = 2.0
+#: ... and this many periods of the lowest mode
+TAIL_PERIODS = 10.0
+#: a run whose response has not decayed is made again with a tail this many times longer ...
+TAIL_GROWTH = 2.0
+#: ... at most this many times in all
+TAIL_TRIES = 3
+#: the columns a run's decay is judged on are its response's: not the ground's input, nor the
+#: energies that accumulate (their largest value is always their last)
+_NOT_RESPONSE = ("ag", "E_input", "E_hysteretic", "E_error", "E_damping")
+#: a column whose peak is below this share of the largest peak in its unit is at rest (rounding)
+_AT_REST = 1e-6
+
+
+def tail_s(frequencies_hz) -> float:
+    """The first tail after a motion: TAIL_PERIODS periods of the lowest (non-zero) frequency,
+    at least TAIL_MIN_S."""
+    f = [x for x in frequencies_hz if x > 0.0 and math.isfinite(x)]
+    return max(TAIL_MIN_S, TAIL_PERIODS / min(f)) if f else TAIL_MIN_S
+
+
+def grown(time: np.ndarray, columns: dict[str, np.ndarray], split_s: float,
+          tolerance: float) -> list[tuple[str, float]]:
+    """The response columns whose peak |value| after ``split_s`` exceeds the one before by more
+    than ``tolerance`` of it, with their growth; columns at rest (their peak below _AT_REST of
+    the largest in their unit) left out."""
+    before = time <= split_s
+    peaks = {}
+    for column, x in columns.items():
+        if column.startswith(_NOT_RESPONSE):
+            continue
+        peaks[column] = (float(np.max(np.abs(x[before]), initial=0.0)), float(np.max(np.abs(x), initial=0.0)))
+    largest: dict[str, float] = {}
+    for column, (_, whole) in peaks.items():
+        largest[_unit(column)] = max(largest.get(_unit(column), 0.0), whole)
+    return [(column, whole / first - 1.0 if first > 0.0 else math.inf) for column, (first, whole) in peaks.items()
+            if whole > first * (1.0 + tolerance) and whole > _AT_REST * largest[_unit(column)]]
+
+
+#: the units' suffixes of the output columns, longest first
+_UNITS = ("_m_s2", "_rad_s2", "_m_s", "_rad_s", "_rad", "_Nm", "_m", "_N", "_J")
+
+
+def _unit(column: str) -> str:
+    return next((u for u in _UNITS if column.endswith(u)), "")
