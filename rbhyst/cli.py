@@ -764,6 +764,9 @@ def make_motion(
     dt: Annotated[float, typer.Option(help="Sampling step in s.")] = 0.005,
     seed: Annotated[int, typer.Option(help="Random seed: the same seed gives the same motions.")] = 1,
     motions: Annotated[int, typer.Option(min=1, help="Number of motions (each with its own noise).")] = 1,
+    table: Annotated[Optional[str], typer.Option(help="The shake table's limits, any of displacement=D (m, peak "
+                                                      "to peak), velocity=V (m/s), acceleration=A (g): every record "
+                                                      "made within them.")] = None,
     plots: Annotated[bool, typer.Option("--plots/--no-plots", help="Write trs.png.")] = True,
 ):
     """Spectrum-compatible support motions: one record per axis whose TRS lies within 0.9-1.3 of the RRS.
@@ -785,15 +788,21 @@ def make_motion(
             raise InputError(f"--axes: {axes}: 2 (x1 horizontal, x2 vertical) or 3 (x1, x2 horizontal, x3 vertical)")
         if rrs_x3 is not None and axes != 3:
             raise InputError("--rrs-x3: only with --axes 3 (with two axes the vertical is x2: --rrs-x2)")
+        from rbhyst.analyses.qualification.table import read_table, table_problems
+
+        limits, problems = read_table(table)
         spectra, standard = requested_rrs(rrs, rrs_x2, rrs_damping, sds, z_over_h, Path.cwd(), keys, level,
                                           rrs_x3, space=axes == 3)
-        problems = matching.motion_problems(spectra, duration, dt, None, standard, keys)
+        problems += matching.motion_problems(spectra, duration, dt, None, standard, keys)
+        problems += table_problems(limits, {a: None if r.peak_min is None else r.peak_min / 9.80665
+                                            for a, r in spectra.items()})
         if problems:
             raise InputError(problems)
-        made = matching.make_motions(spectra, motions, duration, dt, seed, vertical="x3" if axes == 3 else "x2")
+        made = matching.make_motions(spectra, motions, duration, dt, seed, vertical="x3" if axes == 3 else "x2",
+                                     table=limits)
         options = {"--rrs": rrs, "--rrs-x2": rrs_x2, "--rrs-x3": rrs_x3, "--rrs-damping": rrs_damping, "--sds": sds,
                    "--z-over-h": z_over_h, "--level": level, "--axes": axes if axes != 2 else None,
-                   "--duration": duration, "--dt": dt, "--seed": seed}
+                   "--duration": duration, "--dt": dt, "--seed": seed, "--table": table}
         mark = f"{MOTION_MARK} " + " ".join(f"{k} {shlex.quote(str(v))}" for k, v in options.items() if v is not None)
         with staged_directory(out) as tmp:
             for m in made:
@@ -811,6 +820,10 @@ def make_motion(
         for axis, r in m.records.items():
             least = "" if r.check.peak_min is None else f" (at least {r.check.peak_min / 9.80665:.3g} g)"
             strong = "" if r.strong_min is None else f" (at least {r.strong_min:g} s)"
+            if r.table is not None:
+                strong += (f"; asks the table {r.reached['displacement']:.3g} m peak to peak, "
+                           f"{r.reached['velocity']:.3g} m/s, {r.reached['acceleration']:.3g} g (high-pass from "
+                           f"{r.high_pass:.3g} Hz)")
             say(f"motion {m.number} {axis}: TRS from {r.check.said()} at {len(r.check.fine_frequency)} frequencies "
                 f"({r.iterations} iterations); peak {float(abs(r.acc_g).max()):.3g} g{least}; strong motion "
                 f"{r.strong:.3g} s{strong}")
@@ -849,6 +862,9 @@ def qualify(
     seed: Annotated[Optional[int], typer.Option(help="Random seed of the motions.")] = None,
     duration: Annotated[Optional[float], typer.Option(help="Length of each motion in s (AC156: 30).")] = None,
     motion_dt: Annotated[Optional[float], typer.Option(help="Sample step of the motions in s.")] = None,
+    table: Annotated[Optional[str], typer.Option(help="The shake table's limits, any of displacement=D (m, peak "
+                                                      "to peak), velocity=V (m/s), acceleration=A (g): every motion "
+                                                      "made within them.")] = None,
     statistic: Annotated[Optional[str], typer.Option(help="The demand over the motions: max (the largest, the "
                                                           "default) or mean (from 7 motions on, ASCE 7-10 "
                                                           "16.2.4).")] = None,
@@ -874,7 +890,7 @@ def qualify(
         req = request(d, {"standard": standard, "sds": sds, "z_over_h": z_over_h, "level": level, "rrs": rrs,
                           "rrs_x2": rrs_x2, "rrs_x3": rrs_x3,
                           "rrs_damping": rrs_damping, "motions": motions, "seed": seed, "duration": duration,
-                          "motion_dt": motion_dt, "statistic": statistic})
+                          "motion_dt": motion_dt, "statistic": statistic, "table": table})
         target = out if out is not None else _sibling_dir(d, deck, "-qualify")
         check_free(target, output_files(req) + (["qualification.png"] if plots and d.output.plots else []))
         if report:

@@ -752,3 +752,52 @@ def test_decay_is_judged_on_the_responses_growth_not_the_inputs_nor_the_energies
     got = grown(t, cols, 5.0, 0.001)
     assert [c for c, _ in got] == ["u2_m"] and got[0][1] == pytest.approx((np.exp(-5.0) - np.exp(-10.0)) / (1 - np.exp(-5.0)), rel=1e-9)
     assert tail_s([0.0, 0.5, 7.0]) == 20.0 and tail_s([20.0]) == 2.0 and tail_s([]) == 2.0
+
+
+# ---------------------------------------------------------------- the table
+
+
+@pytest.mark.parametrize("options", [
+    ("--rrs", "ac156", "--sds", "1.0", "--z-over-h", "0.5", "--seed", "1"),  # 0.23-0.27 m unlimited
+    ("--rrs", "ieee693", "--level", "moderate", "--seed", "2"),
+])
+def test_a_table_limit_is_met_by_every_record(tmp_path, options):
+    from independent_spectra import octave_grid, trs
+
+    out = tmp_path / "m"
+    code, err = invoke("make-motion", out, *options, "--motions", "2", "--table", "displacement=0.15,velocity=1.0",
+                       "--no-plots")
+    assert code == 0, err
+    rrs = ac156(1.0, 0.5) if "ac156" in options else ieee693("moderate")
+    facts = json.loads((out / "motions.json").read_text())["motions"]
+    for m in facts:
+        for axis in ("x1", "x2"):
+            dt, a = _acc_g(out / m["files"][axis])
+            v, d = matching.integrate(a * G, dt)
+            assert np.ptp(d) <= 0.15 and np.abs(v).max() <= 1.0
+            assert m["axes"][axis]["table"]["pass"] and m["axes"][axis]["displacement_peak_to_peak_m"] == \
+                pytest.approx(np.ptp(d), rel=1e-9)
+            if m["number"] == 1:  # (the TRS still in its band, independently)
+                f = octave_grid(*rrs[axis].check_range)
+                ratio = trs(a * G, dt, f, 0.05) / rrs[axis](f)
+                assert rrs[axis].band[0] <= ratio.min() and ratio.max() <= rrs[axis].band[1]
+
+
+def test_a_table_no_record_fits_is_exit_3_with_the_limit_and_what_would_fit(tmp_path):
+    code, err = invoke("make-motion", tmp_path / "m", "--rrs", "ac156", "--sds", "1.0", "--z-over-h", "0.5",
+                       "--table", "displacement=0.03", "--no-plots")
+    line, = errors(err)
+    assert code == 3 and line.startswith("error: motion 1 (seed 1) cannot be made within the table: x1: the table's "
+                                         "displacement limit is 0.03 m peak to peak and the record asks ")
+    assert "a table of displacement=" in line and not (tmp_path / "m").exists()
+    code, err = invoke("make-motion", tmp_path / "m", "--rrs", "ac156", "--sds", "1.0", "--z-over-h", "0.5",
+                       "--table", "acceleration=0.5,stroke=3,velocity=-1", "--no-plots")
+    assert code == 2 and errors(err) == [
+        "error: --table: 'stroke=3': name=value with displacement (m, peak to peak), velocity (m/s) or acceleration (g)",
+        "error: --table: velocity=-1: must be positive (m/s, peak)",
+        "error: --table: acceleration=0.5 g is below the least peak the RRS of x1 asks for (0.72 g): no record can "
+        "meet both"]
+    deck = _cabinet(tmp_path, {"standard": "ac156", "sds": 1.0, "z_over_h": 0.5, "table": {"stroke": 0.2},
+                               "acceleration_limit_g": {"top": 3.0}})
+    code, err = invoke("qualify", deck, "--out", tmp_path / "q")
+    assert code == 2 and len(errors(err)) == 1 and "qualify.table.stroke" in err

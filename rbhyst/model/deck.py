@@ -679,6 +679,14 @@ class Loops(_Model):
     points_per_cycle: Annotated[int, Field(ge=8)] = 2000
 
 
+class ShakeTable(_Model):
+    """A shake table's limits every made motion keeps within (rbhyst.analyses.qualification.table)."""
+
+    displacement: PosFloat | None = None  # m, peak to peak (the actuator's stroke)
+    velocity: PosFloat | None = None  # m/s, peak
+    acceleration: PosFloat | None = None  # g, peak
+
+
 class Qualify(_Model):
     """What ``rbhyst qualify`` holds the deck to (see README, "Qualification"): a required
     response spectrum (a standard's, or files), the motions, and the limits."""
@@ -706,6 +714,8 @@ class Qualify(_Model):
     #: the demand over the motions: "max", the largest (every motion a test that must pass), or
     #: "mean", their mean from seven motions on (ASCE 7-10 16.2.4; fewer: the largest)
     statistic: Literal["max", "mean"] = "max"
+    #: the shake table's limits, which every made motion keeps within
+    table: ShakeTable | None = None
 
     @model_validator(mode="after")
     def _one_spectrum(self):

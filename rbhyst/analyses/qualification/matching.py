@@ -247,6 +247,9 @@ class Record:
     durations: dict = field(default_factory=dict)
     strong_min: float | None = None
     plateau: float | None = None  # s, the envelope's plateau it was made on
+    table: object = None  # table.Table the record was made within (None: no table)
+    high_pass: float | None = None  # Hz, the corner of its high-pass
+    reached: dict = field(default_factory=dict)  # what it asks of a table (table.Table.reached)
 
     @property
     def strong(self) -> float:
@@ -258,8 +261,12 @@ class Record:
         return self.strong_min is None or self.strong >= self.strong_min
 
     @property
+    def table_ok(self) -> bool:
+        return self.table is None or not self.table.over(self.reached)
+
+    @property
     def ok(self) -> bool:
-        return self.check.ok and self.strong_ok
+        return self.check.ok and self.strong_ok and self.table_ok
 
     def facts(self, dt: float, rrs: RRS) -> dict:
         acc = self.acc_g * G
@@ -274,6 +281,8 @@ class Record:
                 "strong_motion_pass": self.strong_ok, "strong_motion_definition": strong_motion.DEFINITION,
                 **self.durations, "envelope_plateau_s": self.plateau,
                 "strong_part_ratio": strong_motion.strong_part_ratio(acc, dt),
+                "high_pass_hz": self.high_pass,
+                **({} if self.table is None else {"table": {**self.table.describe(), "pass": self.table_ok}}),
                 "trs": self.check.summary()}
 
 
@@ -373,16 +382,16 @@ def motion_problems(rrs: dict[str, RRS], duration: float, dt: float, strong: flo
 
 
 def make_motions(rrs: dict[str, RRS], count: int, duration: float, dt: float, seed: int,
-                 strong: float | None = None, progress=None, vertical: str = "x2") -> list[Motion]:
+                 strong: float | None = None, progress=None, vertical: str = "x2", table=None) -> list[Motion]:
     """``count`` motions, each a record per axis of ``rrs``, matched to it; ``vertical``: the
-    vertical axis (x2 in the plane, x3 in space). An AnalysisError (what would work said) when
-    one cannot be matched."""
+    vertical axis (x2 in the plane, x3 in space); ``table``: a table.Table whose limits every
+    record keeps within. An AnalysisError (what would work said) when one cannot be matched."""
     strong = default_strong(duration) if strong is None else strong
     motions = []
     for k in range(1, count + 1):
-        m = _matched_motion(rrs, k, duration, dt, seed, strong, vertical)
+        m = _matched_motion(rrs, k, duration, dt, seed, strong, vertical, table)
         if not m.ok:
-            raise AnalysisError(_failure(m, rrs, duration, dt, seed, strong))
+            raise AnalysisError(_failure(m, rrs, duration, dt, seed, strong, table))
         motions.append(m)
         if progress is not None:
             progress(k, count)
@@ -399,11 +408,11 @@ def streams(axes, vertical: str = "x2") -> dict[str, int]:
     return out
 
 
-def _matched_motion(rrs, number, duration, dt, seed, strong, vertical: str = "x2") -> Motion:
+def _matched_motion(rrs, number, duration, dt, seed, strong, vertical: str = "x2", table=None) -> Motion:
     m = Motion(number, seed, dt, duration, strong, vertical=vertical)
     stream = streams(rrs, vertical)
     for axis, r in rrs.items():
-        m.records[axis] = _matched_record(r, axis, duration, dt, strong, (seed, number, stream[axis]))
+        m.records[axis] = _within_table(r, axis, duration, dt, strong, (seed, number, stream[axis]), table)
     return m
 
 
@@ -411,14 +420,36 @@ def _matched_motion(rrs, number, duration, dt, seed, strong, vertical: str = "x2
 STRONG_TRIES = 3
 
 
-def _matched_record(r: RRS, axis: str, duration: float, dt: float, plateau: float, noise: tuple) -> Record:
+def _within_table(r: RRS, axis: str, duration: float, dt: float, plateau: float, noise: tuple, table) -> Record:
+    """A record of one axis within the table's limits (rbhyst.analyses.qualification.table): its
+    high-pass raised step by step until it fits; the one that comes nearest where none does."""
+    from rbhyst.analyses.qualification.table import G as _G, HIGH_PASS_STEPS, MARGIN as TABLE_MARGIN
+
+    if table is None:
+        return _matched_record(r, axis, duration, dt, plateau, noise)
+    cap = None if table.acceleration is None else table.acceleration * _G * (1.0 - 2.0 * TABLE_MARGIN)
+    best, best_excess = None, math.inf
+    for hp in HIGH_PASS_STEPS:
+        rec = _matched_record(r, axis, duration, dt, plateau, noise, hp, cap)
+        rec.table, rec.reached = table, table.reached(rec.acc_g * G, dt)
+        if rec.ok:
+            return rec
+        excess = max([rec.reached[k] / getattr(table, k) for k in table.over(rec.reached)], default=1.0)
+        if rec.check.ok and rec.strong_ok and excess < best_excess:
+            best, best_excess = rec, excess
+    return best if best is not None else rec
+
+
+def _matched_record(r: RRS, axis: str, duration: float, dt: float, plateau: float, noise: tuple,
+                    high_pass: float = 0.5, peak_max: float | None = None) -> Record:
     """A record of one axis, its envelope's plateau lengthened (the same noise) until its
     strong motion, measured, holds what the RRS asks (``strong_min_s``) where it can."""
     for _ in range(STRONG_TRIES):
-        acc, iterations = match(r, duration, dt, plateau, np.random.default_rng(list(noise)))
+        acc, iterations = match(r, duration, dt, plateau, np.random.default_rng(list(noise)), high_pass, peak_max)
         acc_g = in_file_digits(acc / G)
         rec = Record(axis, acc_g, check_record(acc_g * G, dt, r), iterations,
-                     strong_motion.measured(acc_g * G, dt), r.strong_min_s, plateau)
+                     strong_motion.measured(acc_g * G, dt), r.strong_min_s, plateau,
+                     high_pass=high_pass * r.check_range[0])
         longest = duration - 1.0  # ramps of half a second at least
         if rec.strong_ok or plateau >= longest:
             return rec
@@ -426,11 +457,24 @@ def _matched_record(r: RRS, axis: str, duration: float, dt: float, plateau: floa
     return rec
 
 
-def _failure(m: Motion, rrs, duration, dt, seed, strong) -> str:
+def _table_failure(axis: str, r: Record) -> str:
+    """Which table limit a record is beyond at the least, and what would fit."""
+    from rbhyst.analyses.qualification.table import said
+
+    over = r.table.over(r.reached)
+    parts = [f"the table's {k} limit is {said(k, getattr(r.table, k))} and the record asks {said(k, r.reached[k])}"
+             for k in over]
+    fit = ", ".join(f"{k}={1.05 * r.reached[k]:.3g}" for k in over)
+    return (f"{axis}: {'; '.join(parts)} at the least (high-pass from {r.high_pass:.3g} Hz, the TRS in its band): "
+            f"a table of {fit} would fit, or a smaller RRS")
+
+
+def _failure(m: Motion, rrs, duration, dt, seed, strong, table=None) -> str:
     """Why motion ``m`` fails, and what would work: another seed tried here, or a longer motion."""
     bad = [f"{axis}: its TRS lies from {r.check.said()}, outside {r.check.band[0]:g}-{r.check.band[1]:g}"
            for axis, r in m.records.items() if not r.check.in_band]
     bad += [f"{axis}: {r.check.said_peak()}" for axis, r in m.records.items() if not r.check.peak_ok]
+    bad += [_table_failure(axis, r) for axis, r in m.records.items() if not r.table_ok]
     bad += [f"{axis}: its strong motion lasts {r.strong:.3g} s, short of {r.strong_min:g} s ({strong_motion.DEFINITION})"
             for axis, r in m.records.items() if not r.strong_ok]
     pairs = m.correlations
@@ -441,9 +485,13 @@ def _failure(m: Motion, rrs, duration, dt, seed, strong) -> str:
     else:
         bad += [f"the correlation coefficient of {pair.replace('_', ' and ')} is {c:.3f}, not below "
                 f"{MAX_CORRELATION:g}" for pair, c in pairs.items() if abs(c) >= MAX_CORRELATION]
+    if all(r.check.ok and r.strong_ok for r in m.records.values()) and \
+            all(abs(c) < MAX_CORRELATION for c in m.correlations.values()):
+        # matched, but beyond the table: what would fit is said with each record
+        return f"motion {m.number} (seed {seed}) cannot be made within the table: {'; '.join(bad)}"
     works = None
     for other in range(seed + 1, seed + 4):
-        if _matched_motion(rrs, m.number, duration, dt, other, strong, m.vertical).ok:
+        if _matched_motion(rrs, m.number, duration, dt, other, strong, m.vertical, table).ok:
             works = f"--seed {other} meets it"
             break
     if works is None:
@@ -484,7 +532,8 @@ def _lift(acc: np.ndarray, pulse: np.ndarray, target: float) -> np.ndarray:
     return acc + np.sign(acc[i]) * (target - abs(acc[i])) * np.roll(pulse, i)[:n]
 
 
-def match(rrs: RRS, duration: float, dt: float, strong: float, rng) -> tuple[np.ndarray, int]:
+def match(rrs: RRS, duration: float, dt: float, strong: float, rng,
+          high_pass: float = 0.5, peak_max: float | None = None) -> tuple[np.ndarray, int]:
     """One record (m/s2) whose TRS lies within the RRS's band and whose peak acceleration is at
     least the RRS's ``peak_min`` (as far as MAX_ITERATIONS take it), and the iterations it took.
 
@@ -513,7 +562,7 @@ def match(rrs: RRS, duration: float, dt: float, strong: float, rng) -> tuple[np.
     is_check = np.isin(control, checks)
     top_check = np.flatnonzero(is_check)[-1]
     lf = np.log(np.maximum(f, 1e-6))
-    band = _taper(f, lo / 2.0, min(top * 1.2, 0.8 * 0.5 / dt))
+    band = _taper(f, high_pass * lo, min(top * 1.2, 0.8 * 0.5 / dt))
     amp = rrs(np.maximum(f, 1e-6)) * band
     acc = to_rest(env * np.fft.irfft(np.fft.rfft(rng.standard_normal(m)) * amp, m)[:n], dt, env)
     lo_ok, hi_ok = rrs.band[0] + MARGIN, rrs.band[1] - 3 * MARGIN
@@ -534,6 +583,8 @@ def match(rrs: RRS, duration: float, dt: float, strong: float, rng) -> tuple[np.
         err = max(np.max(np.log(lo_ok / r_check)), np.max(np.log(r_check / hi_ok)))
         if peak_ok is not None:
             err = max(err, math.log(peak_ok / np.max(np.abs(acc))))
+        if peak_max is not None:  # a table's limit
+            err = max(err, math.log(np.max(np.abs(acc)) / peak_max))
         if err < best_err:
             best, best_err, best_it = acc, err, it
         if err <= 0.0 or it == MAX_ITERATIONS:
@@ -554,6 +605,8 @@ def match(rrs: RRS, duration: float, dt: float, strong: float, rng) -> tuple[np.
             # a peak below the least the RRS asks for is raised, by the process's own shape
             # of a peak (the next corrections restore the spectrum around it)
             acc = _lift(acc, pulse, peak_ok * (1.0 + MARGIN))
+        if peak_max is not None and np.max(np.abs(acc)) > peak_max:
+            acc = np.clip(acc, -peak_max, peak_max)  # the table's limit (the corrections restore the spectrum)
         acc = to_rest(acc * edges, dt, env)
     return best, best_it
 

@@ -24,6 +24,7 @@ from pathlib import Path
 import numpy as np
 
 from rbhyst.analyses.qualification import free_vibration, matching, strong_motion
+from rbhyst.analyses.qualification.table import Table, read_table, table_problems
 from rbhyst.analyses.qualification.rrs import PLANE_AXES, SPACE_AXES, STANDARDS, G, RRS, requested_rrs
 from rbhyst.errors import InputError
 
@@ -51,6 +52,8 @@ class Request:
     axes: dict = field(default_factory=lambda: dict(PLANE_AXES))
     #: the demand over the motions: "max" or "mean" (see the module)
     statistic: str = "max"
+    #: the shake table's limits (table.Table; None: none)
+    table: object = None
 
     @property
     def vertical(self) -> str:
@@ -74,7 +77,7 @@ def request(deck, cli: dict) -> Request:
               "rrs_damping": "--rrs-damping",
               "sds": "--sds", "z_over_h": "--z-over-h", "level": "--level", "motions": "--motions",
               "duration": "--duration",
-              "motion_dt": "--motion-dt", "seed": "--seed", "statistic": "--statistic"}
+              "motion_dt": "--motion-dt", "seed": "--seed", "statistic": "--statistic", "table": "--table"}
     keys = {k: option[k] if k in cli else f"qualify.{k}" for k in option}
     problems = []
     if "standard" in values and "rrs" in values:
@@ -93,6 +96,12 @@ def request(deck, cli: dict) -> Request:
             motions = 1
     if isinstance(motions, int) and motions < 1:
         problems.append(f"{keys['motions']}: {motions}: at least 1")
+    limits = values.get("table")
+    if isinstance(limits, str):
+        limits, said = read_table(limits, keys["table"])
+        problems += said
+    elif isinstance(limits, dict):
+        limits = Table(**{k: v for k, v in limits.items() if v is not None}) if any(limits.values()) else None
     if values.get("statistic", "max") not in STATISTICS:
         problems.append(f"{keys['statistic']}: {values['statistic']!r}: max (the largest over the motions) or mean "
                         f"(their mean from {MEAN_FROM} motions on, ASCE 7-10 16.2.4)")
@@ -110,6 +119,10 @@ def request(deck, cli: dict) -> Request:
         if rrs and motions != "deck":
             problems += matching.motion_problems(rrs, values.get("duration", 30.0), values.get("motion_dt", 0.005),
                                                  None, standard, spec_keys)
+            problems += table_problems(limits, {a: None if r.peak_min is None else r.peak_min / G
+                                                for a, r in rrs.items()}, keys["table"])
+        if limits is not None and motions == "deck":
+            problems.append(f"{keys['table']}: with motions made (not the deck's own, which are as they are)")
     problems += _limit_problems(deck, values, space)
     gravity = deck.body.gravity if deck.body is not None else None
     if gravity is not None and not space and abs(gravity[0]) > abs(gravity[1]):
@@ -124,7 +137,7 @@ def request(deck, cli: dict) -> Request:
     return Request(rrs, standard, motions, int(values.get("seed", 1)), float(values.get("duration", 30.0)),
                    float(values.get("motion_dt", 0.005)), values.get("acceleration_limit_g") or {},
                    values.get("force_capacity_N"), dict(SPACE_AXES if space else PLANE_AXES),
-                   values.get("statistic", "max"))
+                   values.get("statistic", "max"), limits)
 
 
 def output_files(req: Request) -> list[str]:
@@ -255,6 +268,7 @@ def qualify(deck, req: Request, folder: Path, integrator: str | None = None, dt:
         "axes": dict(req.axes),
         "motions": motion_facts,
         "statistic": statistic_facts(req.statistic, n),
+        "table": None if req.table is None else req.table.describe(),
         "margin": "1 - demand / capacity: the share of the capacity left (negative: exceeded)",
         "criteria": [{k: v for k, v in c.items() if k != "label"} for c in criteria],
         "trs": {"pass": trs_ok, "band": {axis: list(r.band) for axis, r in req.rrs.items()},
@@ -369,7 +383,8 @@ def _deck_strong_motion(excitation, rrs: dict[str, RRS]) -> dict:
 def _made_motions(deck, req: Request, folder: Path, notes: list) -> GivenMotions:
     """Spectrum-compatible motions made, written into ``folder`` (motions/, trs.csv,
     trs_fine.csv, records.csv, motions.json) and checked."""
-    made = matching.make_motions(req.rrs, req.motions, req.duration, req.motion_dt, req.seed, vertical=req.vertical)
+    made = matching.make_motions(req.rrs, req.motions, req.duration, req.motion_dt, req.seed, vertical=req.vertical,
+                                 table=req.table)
     (folder / "motions").mkdir()
     mark = f"# rbhyst qualify {deck.source.name if deck.source else 'deck'}"
     decks, checks = [], {axis: [] for axis in req.rrs}
