@@ -15,7 +15,7 @@ import pytest
 
 from conftest import DECKS, invoke, snapshot, write_deck
 from rbhyst.analyses.qualification import matching
-from rbhyst.analyses.qualification.psd import load_psd, random_history, welch_check
+from rbhyst.analyses.qualification.psd import load_psd, random_history, tolerance, welch_check
 from rbhyst.analyses.qualification.rrs import (ac156, ac156_levels, ieee693, ieee693_beta, read_rrs,
                                                sixth_octave)
 from rbhyst.errors import InputError
@@ -430,17 +430,64 @@ def test_random_vibration_meets_its_psd_band_by_band_and_its_rms():
     psd = load_psd(TABLE, "g2/Hz", Path("."))
     dt, x = random_history(psd, 30.0, seed=11)
     assert dt == pytest.approx(1 / 5000)
-    bands, rms, target = welch_check(x, dt, psd)
+    full = x[int(2.0 / dt) + 1:-int(2.0 / dt) - 1]  # between its 2 s ramps
+    bands, rms, target = welch_check(full, dt, psd)
     assert [(b.f_lo, b.f_hi) for b in bands] == [(10.0, 40.0), (40.0, 200.0), (200.0, 500.0)]
     assert all(b.bins >= 8 and abs(b.db) <= 3.0 for b in bands), [(b.bins, b.db) for b in bands]
     # the exact integral of the table: 0.0025 * 10 / 3 (4^3 - 1) + 0.04 * 160 + 0.04 * 200 (1 - 0.4)
     assert target / G == pytest.approx(math.sqrt(0.0025 * 10 / 3 * 63 + 6.4 + 8.0 * 0.6), rel=1e-12)
     assert abs(rms / target - 1.0) < 0.02
-    # Gaussian and stationary: kurtosis 3, and the same rms in each third of the history
-    z = (x - x.mean()) / x.std()
+    # Gaussian and stationary at full level: kurtosis 3, and the same rms in each third
+    z = (full - full.mean()) / full.std()
     assert abs(np.mean(z**4) - 3.0) < 0.1 and abs(np.mean(z**3)) < 0.05
-    thirds = [np.sqrt(np.mean(p**2)) / rms for p in np.array_split(x, 3)]
+    thirds = [np.sqrt(np.mean(p**2)) / rms for p in np.array_split(full, 3)]
     assert np.allclose(thirds, 1.0, atol=0.03)
+    # MIL-STD-810H's tolerances, checked independently here: every Welch line within 3 dB
+    from scipy.signal import welch
+
+    f, pxx = welch(full, fs=1 / dt, window="hann", nperseg=2048, noverlap=1024, detrend=False)
+    inside = (f > 10.0 + f[1]) & (f < 500.0 - f[1])
+    assert np.all(np.abs(10 * np.log10(pxx[inside] / psd(f[inside]))) <= 3.0)
+    check = tolerance(x, dt, psd, 2.0)
+    assert check["pass"] and check["lines_outside"] == 0 and check["rms_m_s2"] == pytest.approx(rms, rel=1e-4)
+
+
+def test_random_vibration_starts_and_ends_at_rest_and_its_drive_stays_bounded():
+    """As a controller drives a shaker: no step at the start (4.09 g before), no drift of the
+    ground (1.45 m in 30 s before), the drive displacement a few times its rms."""
+    psd = load_psd(TABLE, "g2/Hz", Path("."))
+    dt, x = random_history(psd, 30.0, seed=11)
+    v, d = matching.integrate(x, dt)
+    assert x[0] == 0.0 and abs(x[-1]) < 1e-12 * np.abs(x).max()
+    assert abs(v[-1]) < 1e-9 * np.abs(v).max() and abs(d[-1]) < 1e-9 * np.abs(d).max()
+    assert np.max(np.abs(x[: int(0.01 / dt)])) < 0.01 * np.abs(x).max()  # a ramp, not a step
+    # the displacement's rms from the PSD: the integral of PSD / (2 pi f)^4
+    f = np.geomspace(10.0, 500.0, 20001)
+    d_rms = math.sqrt(np.trapezoid(psd(f) / (2 * np.pi * f) ** 4, f))
+    assert np.abs(d).max() < 6.0 * d_rms and np.ptp(d) < 10.0 * d_rms
+    # sigma clipping: every peak within 3 rms, the PSD still within its tolerances
+    dt, y = random_history(psd, 30.0, seed=11, clip_sigma=3.0)
+    assert np.abs(y).max() <= 3.0 * psd.rms * (1 + 1e-6) < np.abs(x).max()
+    assert tolerance(y, dt, psd, 2.0)["pass"]
+
+
+def test_random_vibration_out_of_its_tolerance_warns_and_too_short_to_check_says_so():
+    from types import SimpleNamespace
+
+    from rbhyst.model.plausible import random_warnings
+    from rbhyst.model.system import RandomSeries
+
+    psd = load_psd(TABLE, "g2/Hz", Path("."))
+    dt, x = random_history(psd, 30.0, seed=11)
+    loud = tolerance(1.2 * x, dt, psd, 2.0)  # +1.6 dB: every line in, the rms 20 % over
+    assert loud["pass"] is False and loud["lines_outside"] == 0 and not loud["rms_pass"]
+    ex = SimpleNamespace(ag1=RandomSeries(0.0, dt, x, loud), ag2=RandomSeries(0.0, dt, x, tolerance(x, dt, psd, 2.0)))
+    line, = random_warnings(ex)
+    assert line.startswith("excitation.support.x1: random vibration NOT within the tolerances of MIL-STD-810H")
+    dt, short = random_history(psd, 3.0, seed=11)
+    check = tolerance(short, dt, psd, 0.3)
+    assert check["pass"] is None and check["dof"] < 120 and "at least" in check["why"]
+    assert random_warnings(SimpleNamespace(ag1=RandomSeries(0.0, dt, short, check))) == []
 
 
 def test_random_vibration_is_the_same_bits_for_the_same_seed():

@@ -473,7 +473,8 @@ class Random(_Model):
     [[frequency_hz, value], ...] (log-log between them, as MIL-STD-810 tables give them) or a CSV
     file of them; ``duration`` s long, the same history for the same ``seed`` (see
     rbhyst.model.random_vibration). ``dt``: its sample step (default a tenth of the period
-    of the PSD's highest frequency); ``scale`` multiplies the history (the PSD by its square)."""
+    of the PSD's highest frequency); ``scale`` multiplies the history (the PSD by its square);
+    ``ramp`` and ``clip_sigma`` as a controller starts, stops and limits it."""
 
     type: Literal["random"]
     psd: str | list[list[float]]
@@ -482,6 +483,10 @@ class Random(_Model):
     seed: Annotated[int, Field(ge=0)]
     dt: PosFloat | None = None
     scale: float = 1.0
+    #: s, the start-up and shut-down ramps (None: 2 s, at most a tenth of the duration; 0: none)
+    ramp: Annotated[float, Field(ge=0)] | None = None
+    #: the peaks limited to this many times the rms (a controller's sigma clipping; None: not)
+    clip_sigma: Annotated[float, Field(ge=2)] | None = None
 
     @field_validator("psd", mode="before")
     @classmethod

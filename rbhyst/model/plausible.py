@@ -70,6 +70,19 @@ def peak(signal) -> float:
     return 0.0
 
 
+def random_warnings(excitation) -> list[str]:
+    """One line per random vibration that its standard's tolerances do not accept
+    (rbhyst.model.random_vibration.tolerance): the test it stands for would not be run so."""
+    from rbhyst.model.random_vibration import said
+
+    out = []
+    for key, place in PLACES.items():
+        check = getattr(getattr(excitation, key, None), "tolerance", None)
+        if check and check["pass"] is False:
+            out.append(f"{place}: {said(check)}")
+    return out
+
+
 def excitation_warnings(excitation, units: dict[str, str], mass: float, inertia: float, size: float) -> list[str]:
     """One line per signal whose velocity change is beyond VELOCITY_LIMIT: a support motion's own,
     a force's impulse over the mass, a moment's over the inertia at the body's size. ``units``:

@@ -649,6 +649,9 @@ def _signal(spec, scale_units: dict[str, float], base: Path,
     the signal goes to ``notes``."""
     if isinstance(spec, dk.Random):
         series = random_series(spec, base)
+        from rbhyst.model.random_vibration import said
+
+        notes.append(said(series.tolerance))
         return series, series.duration
     factor = scale_units[spec.units]
     if isinstance(spec, dk.Sine):
@@ -672,17 +675,27 @@ def _signal(spec, scale_units: dict[str, float], base: Path,
     return series, series.duration
 
 
+@dataclass(frozen=True)
+class RandomSeries(Series):
+    """Random vibration's samples, and their check against the standard's tolerances
+    (rbhyst.model.random_vibration.tolerance, of the history before ``scale``)."""
+
+    tolerance: dict = field(default_factory=dict)
+
+
 def random_series(spec: "dk.Random", base: Path) -> Series:
     """Random vibration made once into samples (cached per process), from then on a record."""
-    from rbhyst.model.random_vibration import cached_history, load_psd, size_problems
+    from rbhyst.model.random_vibration import cached_history, default_ramp, load_psd, size_problems, tolerance
 
     psd = load_psd(spec.psd, spec.units, base)
     problems = size_problems(psd, spec.duration, spec.dt, "")
     if problems:  # (the caller puts the signal's place in front)
         raise InputError([p.lstrip(".") for p in problems])
     key = (tuple(map(float, psd.frequency_hz)), tuple(map(float, psd.value)))
-    step, values = cached_history(key, float(spec.duration), int(spec.seed), spec.dt)
-    return Series(0.0, step, values * spec.scale if spec.scale != 1.0 else values)
+    ramp = default_ramp(spec.duration) if spec.ramp is None else float(spec.ramp)
+    step, values = cached_history(key, float(spec.duration), int(spec.seed), spec.dt, ramp, spec.clip_sigma)
+    return RandomSeries(0.0, step, values * spec.scale if spec.scale != 1.0 else values,
+                        tolerance(values, step, psd, ramp))
 
 
 class _Signals:
@@ -863,6 +876,7 @@ def _system(deck: dk.Deck, body, mass, rows, names, mult, elements, excitation, 
     cautions = plausible.excitation_warnings(excitation, plausible.signal_units(deck), float(mass[0]),
                                              float(np.max(spin)), body.extent)
     cautions += plausible.density_warning(body.mass, plausible.body_measure(body), getattr(body, "dimensions", 2))
+    cautions += plausible.random_warnings(excitation)
     return System(
         title=deck.title or "",
         warnings=tuple(cautions),

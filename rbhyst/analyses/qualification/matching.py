@@ -27,11 +27,9 @@ their wavelet details):
    shape a peak of the process has on average (its autocorrelation, the transform of its power
    spectrum: given x(t0) = a, a Gaussian process is a rho(t - t0) in the mean), centred on it.
 
-**End at rest.** The analysis takes a record as linear between its samples, so its velocity
-and displacement are exact integrals of that; a correction e(t) (c0 + c1 tau + c2 tau^2 + c3
-tau^3), tau = t / T, is subtracted with the c that make the final velocity and displacement
-zero and, within that, the displacement history least (a constrained least-squares problem):
-the support ends where it started, at rest, to rounding.
+**End at rest.** The record is corrected to end at rest (rbhyst.model.baseline.to_rest): its
+final velocity and displacement zero for the record linear between its samples, the
+displacement history least within that.
 """
 
 from __future__ import annotations
@@ -42,6 +40,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from rbhyst.analyses.qualification import strong_motion
+from rbhyst.model.baseline import integrate, to_rest  # noqa: F401 (integrate: matching's API too)
 from rbhyst.errors import AnalysisError
 from rbhyst.analyses.qualification.rrs import (AC156_DURATION, AC156_STRONG, G, IEEE693_DURATION, IEEE693_STRONG,
                                                RRS, fine_grid, standard_points)
@@ -79,30 +78,6 @@ def envelope(t: np.ndarray, duration: float, strong: float) -> np.ndarray:
 def default_strong(duration: float) -> float:
     """Ramps of 5 s (a sixth of a shorter motion each): AC156's 20 s of strong motion in 30 s."""
     return duration - 2.0 * min(5.0, duration / 6.0)
-
-
-def integrate(acc: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
-    """Velocity and displacement from rest of an acceleration linear between its samples (exact)."""
-    v = np.concatenate([[0.0], np.cumsum(0.5 * dt * (acc[:-1] + acc[1:]))])
-    d = np.concatenate([[0.0], np.cumsum(dt * v[:-1] + dt * dt * (acc[:-1] / 3.0 + acc[1:] / 6.0))])
-    return v, d
-
-
-def to_rest(acc: np.ndarray, dt: float, env: np.ndarray) -> np.ndarray:
-    """acc less e(t) (c0 + c1 tau + c2 tau^2 + c3 tau^3): final velocity and displacement zero,
-    the displacement history least squares within that."""
-    n = len(acc)
-    tau = np.arange(n) / (n - 1)
-    basis = np.array([env * tau**k for k in range(4)])
-    v0, d0 = integrate(acc, dt)
-    vb, db = zip(*(integrate(b, dt) for b in basis))
-    D = np.array(db).T  # (n, 4): the displacement of each basis function
-    C = np.array([[v[-1] for v in vb], [d[-1] for d in db]])
-    # c = c_p + N z: c_p meets the end conditions, N spans what keeps them; z minimises the drift
-    c_p = np.linalg.lstsq(C, np.array([v0[-1], d0[-1]]), rcond=None)[0]
-    null = np.linalg.svd(C)[2][2:].T
-    z = np.linalg.lstsq(D @ null, d0 - D @ c_p, rcond=None)[0]
-    return acc - (c_p + null @ z) @ basis
 
 
 def in_file_digits(acc_g: np.ndarray) -> np.ndarray:

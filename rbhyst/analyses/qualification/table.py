@@ -44,7 +44,7 @@ class Table:
     def reached(self, acc: np.ndarray, dt: float) -> dict:
         """What a record (m/s2) asks of the table: displacement peak to peak, peak velocity
         (of the record linear between its samples, from rest) and peak acceleration (g)."""
-        from rbhyst.analyses.qualification.matching import integrate
+        from rbhyst.model.baseline import integrate
 
         v, d = integrate(acc, dt)
         return {"displacement": float(np.ptp(d)), "velocity": float(np.max(np.abs(v))),
