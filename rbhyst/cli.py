@@ -448,6 +448,8 @@ def sweep(
         "--save-histories", help="Every case's time history into histories.parquet (needs pyarrow).")] = False,
     plots: Annotated[bool, typer.Option("--plots/--no-plots", help="Write PNG plots.")] = True,
     report: Annotated[bool, typer.Option("--report", help="Also write report.html (see `rbhyst report`).")] = False,
+    redraw: Annotated[bool, typer.Option(
+        "--redraw", help="Write the tables and figures again even where they stand for the finished cases.")] = False,
     tls_ca_file: Annotated[Optional[Path], typer.Option(
         "--tls-ca-file", help="With a tls:// --scheduler: the CA certificate (PEM) the scheduler's is signed by.")] = None,
     tls_cert: Annotated[Optional[Path], typer.Option(
@@ -478,13 +480,12 @@ def sweep(
 
             check_report_target(target)
         from rbhyst.solve.kernels.compiled import ahead_of_time
-        from rbhyst.solve.kernels.loop import run_chunk
 
         on_dask = scheduler is not None or (workers is None and getattr(sw.cluster, "scheduler", None) is not None)
         if on_dask:
             _quiet_dask()
         # built at install, the kernels need no compiling (and numba's cache stays empty)
-        if not on_dask and not ahead_of_time() and not kernels.cached([run_chunk]):
+        if not on_dask and not ahead_of_time() and not kernels.cached([_run_chunk()]):
             say("note: compiling the numba kernels, once (a minute or two); the workers load them from the cache")
             from rbhyst.api import run as _run
 
@@ -519,7 +520,8 @@ def sweep(
             try:
                 outcome = run_sweep(sw, out=target, workers=workers, scheduler=scheduler, fresh=fresh,
                                     save_histories=save_histories, plots=plots, progress=progress,
-                                    started=started, tls_ca_file=tls_ca_file, tls_cert=tls_cert, tls_key=tls_key)
+                                    started=started, tls_ca_file=tls_ca_file, tls_cert=tls_cert, tls_key=tls_key,
+                                    redraw=redraw)
             except SweepIncomplete as err:
                 say(f"error: {err}")
                 raise typer.Exit(EXIT_ANALYSIS) from None
@@ -547,13 +549,24 @@ def sweep(
             say(f"warning: case {r[0]} ({r[1]}, scale {r[2]}) failed: {r[i_msg]}")
         if len(bad) > 5:
             say(f"warning: ... and {len(bad) - 5} more failed cases: see cases.csv (status, message)")
-    say(f"wrote {target}")
+    if outcome.written:
+        say(f"wrote {target}")
+    else:
+        say(f"{target}: its tables and figures stand for these cases, newer than their store (--redraw writes "
+            "them again)")
     if outcome.killed:
         n = len(outcome.killed)
         say(f"error: the sweep is incomplete: case{'s' * (n != 1)} {', '.join(map(str, outcome.killed))} killed "
             f"{'their' if n != 1 else 'its'} worker process every time (failed in cases.csv, not kept): the same "
             f"command tries {'them' if n != 1 else 'it'} again, with more memory per worker if that was the cause")
         raise typer.Exit(EXIT_ANALYSIS)
+
+
+def _run_chunk():
+    """The compiled loop's function (numba's import: only where the kernels may need compiling)."""
+    from rbhyst.solve.kernels.loop import run_chunk
+
+    return run_chunk
 
 
 def _quiet_dask() -> None:

@@ -23,8 +23,8 @@ from matplotlib.ticker import MaxNLocator
 from rbhyst.analyses.sweep.tables import PERCENTILE
 from rbhyst.report._style import plain_number, save, styled, subplots
 from rbhyst.report.fragility import plot_fragility  # noqa: F401 (the sweep's plotter draws fragility.png too)
+from rbhyst.report.sweep_files import PLOT_FILES  # noqa: F401 (the plotter's files, named without matplotlib)
 
-PLOT_FILES = ("ida.png", "vary.png", "motions.png")
 #: the peaks drawn, where the cases have them (every peak is in cases.csv and stats.csv)
 PREFERRED = ("peak_u1_m", "peak_u2_m", "peak_theta3_rad", "peak_at1_m_s2", "peak_at2_m_s2")
 #: those of vary.png: displacements and accelerations

@@ -19,6 +19,7 @@ from rbhyst.analyses.sweep.backends import WorkerLost
 from rbhyst.analyses.sweep.cases import Sweep
 from rbhyst.analyses.sweep.store import Journal
 from rbhyst.analyses.sweep.tables import PERCENTILE, cases_table, peak_cells, write_csv, write_stats
+from rbhyst.analyses.sweep.uptodate import OUTPUT_FILES, OUTPUTS_SUM, outputs_sum, standing
 
 #: the files a sweep writes into its folder (beside its own .rbhyst-sweep/)
 CASES_CSV, STATS_CSV, SWEEP_JSON, HISTORIES_FILE = "cases.csv", "stats.csv", "sweep.json", "histories.parquet"
@@ -54,6 +55,7 @@ class Outcome:
     n_first: int = 0  # cases in that batch
     elapsed_s: list[float] = field(default_factory=list)  # per computed case, in its worker
     wall_s: list[float] = field(default_factory=list)  # per computed case: analysis.wall_s
+    written: bool = False  # the files written by this call (not: they stood as an earlier call wrote them)
 
     @property
     def failed(self) -> int:
@@ -107,7 +109,8 @@ def run_sweep(sweep: Sweep, out: str | Path | None = None, workers: int | None =
               scheduler: str | None = None, fresh: bool = False, save_histories: bool = False,
               plots: bool = True, progress: Progress | None = None,
               started: Callable[["Outcome", int], None] | None = None, tls_ca_file: str | Path | None = None,
-              tls_cert: str | Path | None = None, tls_key: str | Path | None = None, plotter=None) -> Outcome:
+              tls_cert: str | Path | None = None, tls_key: str | Path | None = None, plotter=None,
+              redraw: bool = False) -> Outcome:
     """Compute what ``out`` (default results/<sweep stem>/ beside the sweep file) does not hold
     yet and write the sweep's files. Raises SweepIncomplete when cases were lost with a worker
     or the cluster (what finished is kept: the same call computes the rest).
@@ -118,7 +121,9 @@ def run_sweep(sweep: Sweep, out: str | Path | None = None, workers: int | None =
     rbhyst.report.sweep, which rbhyst.sweep.run_sweep gives).
 
     ``scheduler`` and the ``tls_*`` files (a scheduler that wants TLS) default to the sweep
-    file's ``[cluster]``; ``workers`` runs locally whatever the file says."""
+    file's ``[cluster]``; ``workers`` runs locally whatever the file says. A call that computes
+    nothing leaves the files as they are where they stand as an earlier call wrote them from the
+    same cases (rbhyst.analyses.sweep.uptodate), unless ``redraw``."""
     if plots and plotter is None:
         raise TypeError("plots need a plotter (rbhyst.report.sweep): call rbhyst.sweep.run_sweep")
     plotter = plotter if plots else None
@@ -133,23 +138,7 @@ def run_sweep(sweep: Sweep, out: str | Path | None = None, workers: int | None =
     check_out(out, final_files(save_histories, plotter, sweep.fragility is not None))
     journal = Journal(out, fresh=fresh)
     outcome = Outcome(sweep, out, t_start=time.perf_counter())
-    todo: dict[str, dict] = {}
-    untrusted = list(journal.damaged)  # (key, why); the key None where too little of a line is left
-    for c in sweep.cases:
-        if c.problem is not None or c.key in todo:
-            continue
-        e = journal.entries.get(c.key)
-        if e is not None and save_histories and e.get("status") == "ok":
-            why = journal.history_problem(c.key)
-            if why not in (None, "not kept"):
-                untrusted.append((c.key, why))
-            if why is not None:
-                e = None
-        if e is not None:
-            outcome.results[c.key] = e
-        else:
-            todo[c.key] = c.values
-    outcome.notes.extend(damage_notes(sweep, untrusted))
+    todo = _still_to_compute(sweep, journal, save_histories, outcome)
     outcome.reused = sum(1 for c in sweep.cases if c.key in outcome.results)
     # a scheduler that cannot be reached (or refuses the certificates) is an input error: before
     # the journal is made, so that nothing is written
@@ -176,10 +165,44 @@ def run_sweep(sweep: Sweep, out: str | Path | None = None, workers: int | None =
             raise SweepIncomplete(f"{n} case{'s' * (n != 1)} could not be computed on {outcome.where}: "
                                   f"{outcome.missing_reason}; the {len(outcome.results)} finished are kept in "
                                   f"{journal.folder}: {outcome.missing_rest}", outcome)
-        _write(outcome, journal, save_histories, plotter)
+        made = _made_from(outcome, save_histories, plotter)
+        if todo or redraw or not standing(out, journal.path, made[0]):
+            _write(outcome, journal, save_histories, plotter, made)
+            outcome.written = True
     finally:
         journal.close()
     return outcome
+
+
+def _still_to_compute(sweep: Sweep, journal: Journal, save_histories: bool, outcome: Outcome) -> dict[str, dict]:
+    """The cases the store does not vouch for (key -> values); those it does go into
+    ``outcome.results``, and a note names those it could not vouch for."""
+    todo: dict[str, dict] = {}
+    untrusted = list(journal.damaged)  # (key, why); the key None where too little of a line is left
+    for c in sweep.cases:
+        if c.problem is not None or c.key in todo:
+            continue
+        e = journal.entries.get(c.key)
+        if e is not None and save_histories and e.get("status") == "ok":
+            why = journal.history_problem(c.key)
+            if why not in (None, "not kept"):
+                untrusted.append((c.key, why))
+            if why is not None:
+                e = None
+        if e is not None:
+            outcome.results[c.key] = e
+        else:
+            todo[c.key] = c.values
+    outcome.notes.extend(damage_notes(sweep, untrusted))
+    return todo
+
+
+def _made_from(outcome: Outcome, save_histories: bool, plotter) -> tuple[str, tuple, dict]:
+    """(the sha256 of what the files are made from, cases.csv's header and rows, the varied
+    keys' units): what a finished sweep compares with its sweep.json before writing again."""
+    table = outcome.table()
+    units = _vary_units(outcome.sweep)
+    return outputs_sum(outcome, table, units, save_histories, plotter is not None), table, units
 
 
 def _compute(backend, todo: list[tuple[str, dict]], journal: Journal, outcome: Outcome,
@@ -323,9 +346,9 @@ def _keep(results: list[dict], journal: Journal, outcome: Outcome, save_historie
     outcome.computed += len(results)
 
 
-def _write(outcome: Outcome, journal: Journal, save_histories: bool, plotter) -> None:
+def _write(outcome: Outcome, journal: Journal, save_histories: bool, plotter, made) -> None:
     try:
-        _write_files(outcome, journal, save_histories, plotter)
+        _write_files(outcome, journal, save_histories, plotter, made)
     except DiskFull as err:
         n = len(outcome.results)
         raise DiskFull(err.folder, err.free, "the sweep's tables" + " and plots" * (plotter is not None),
@@ -333,14 +356,13 @@ def _write(outcome: Outcome, journal: Journal, save_histories: bool, plotter) ->
                        "writes them once there is space") from None
 
 
-def _write_files(outcome: Outcome, journal: Journal, save_histories: bool, plotter) -> None:
+def _write_files(outcome: Outcome, journal: Journal, save_histories: bool, plotter, made) -> None:
     sweep = outcome.sweep
-    header, rows = outcome.table()
+    made_from, (header, rows), units = made
     with staged_directory(outcome.out) as tmp:
         write_csv(tmp / CASES_CSV, header, rows)
         write_stats(tmp / STATS_CSV, sweep.cases, sweep.vary_keys, outcome.results,
                     known=peak_cells(header, rows, sweep.cases))
-        (tmp / SWEEP_JSON).write_text(json.dumps(_about(outcome), indent=2) + "\n", encoding="utf-8")
         if save_histories:
             from rbhyst.analyses.sweep.histories import assemble
 
@@ -348,11 +370,15 @@ def _write_files(outcome: Outcome, journal: Journal, save_histories: bool, plott
                      if c.key in outcome.results and outcome.results[c.key].get("history")}
             assemble(tmp / HISTORIES_FILE, sweep.cases, parts)
         if plotter is not None:
-            plotter.write_plots(header, rows, sweep.vary_keys, sweep.scale_kind, tmp, _vary_units(sweep))
+            plotter.write_plots(header, rows, sweep.vary_keys, sweep.scale_kind, tmp, units)
         if sweep.fragility is not None:
             from rbhyst.analyses.fragility import write_fragility
 
             write_fragility(sweep.fragility, header, rows, tmp, plotter)
+        # (last: it lists the files written, itself included, for the next run's up-to-date check)
+        files = sorted({p.relative_to(tmp).as_posix() for p in tmp.rglob("*") if p.is_file()} | {SWEEP_JSON})
+        about = {**_about(outcome), OUTPUTS_SUM: made_from, OUTPUT_FILES: files}
+        (tmp / SWEEP_JSON).write_text(json.dumps(about, indent=2) + "\n", encoding="utf-8")
 
 
 def _vary_units(sweep) -> dict[str, str | None]:
