@@ -1045,3 +1045,32 @@ def test_stats_numbers_are_each_value_s_own_repr():
     assert _stats_text(1.5, 1.5, 0.1 + 0.2, 0.1 + 0.2) == "1.5,1.5,0.30000000000000004,0.30000000000000004\n"
     assert _stats_text(-0.0, 0.0, 0.0, -0.0) == "-0.0,0.0,0.0,-0.0\n"
     assert _stats_text(float("nan"), float("nan"), 1.0, 1.0) == "nan,nan,1.0,1.0\n"
+
+
+def test_a_case_runs_through_the_free_vibration_after_its_motion(tmp_path):
+    """A sweep's case, as a qualification's run, goes on after its motion (a deck without
+    analysis.duration): the peaks a record's end leaves for later are in its figures."""
+    import tomllib
+
+    import numpy as np
+    import rbhyst
+    from rbhyst.analyses.qualification.free_vibration import tail_s
+    from rbhyst.analyses.sweep.worker import run_to_rest
+    from conftest import write_deck
+
+    t = np.arange(0.0, 1.02 + 1e-9, 0.001)
+    pulse = np.where(t >= 1.0, 2.0 * np.sin(np.pi * (t - 1.0) / 0.02), 0.0)  # a 20 ms half-sine, last
+    (tmp_path / "pulse.csv").write_text("time_s,acceleration_g\n" + "\n".join(f"{a:.6f},{b:.9e}" for a, b in
+                                                                               zip(t, pulse)) + "\n")
+    cab = tomllib.loads((DECKS / "cabinet_transformer.toml").read_text())
+    cab["excitation"] = {"support": {"x1": {"file": "pulse.csv", "units": "g"}}}
+    cab["analysis"] = {"dt": 0.001, "integrator": "chang"}
+    deck = rbhyst.load_deck(write_deck(tmp_path, cab))
+    result, late = run_to_rest(deck, keep=False)
+    f1 = result.summary()["modes"]["frequencies_hz"][0]
+    assert result.steps * 0.001 == pytest.approx(1.02 + tail_s([f1]), abs=1.5e-3)
+    alone = rbhyst.run(deck.with_values({"analysis.duration": 1.02 + tail_s([f1])})).summary()
+    assert result.extremes.peaks()["u1_m"] == alone["peaks"]["u1_m"]
+    short = rbhyst.run(deck.with_values({"analysis.duration": 1.02})).summary()
+    assert short["peaks"]["u1_m"] < 0.9 * alone["peaks"]["u1_m"]
+    assert all(line.startswith("the response may not have decayed ") for line in late)

@@ -10,7 +10,9 @@ that tail raises no peak of the response (every output column but the ground's a
 accumulating energies) by more than ``analysis.warn_error`` of it: going on would not change
 the figures beyond the accuracy asked of them. Where it does, the tail is doubled and the run
 made again, up to TAIL_TRIES runs; one that has still not decayed says so in a note, its peaks
-those of the time it ran. (A mount whose loading and unloading curves differ ratchets: the
+those of the time it ran. A sweep's case (rbhyst.analyses.sweep.worker) runs the same first tail
+and keeps no rows: where a peak lies in its second half, its message says the response may not
+have decayed. (A mount whose loading and unloading curves differ ratchets: the
 cabinet on the seed's wire rope sets settles by some 0.3 % of its vertical peak each time its
 free vibration doubles, which this rule lets pass.)
 """
@@ -45,6 +47,23 @@ def tail_s(frequencies_hz) -> float:
     at least TAIL_MIN_S."""
     f = [x for x in frequencies_hz if x > 0.0 and math.isfinite(x)]
     return max(TAIL_MIN_S, TAIL_PERIODS / min(f)) if f else TAIL_MIN_S
+
+
+def late_peaks(extremes: dict, after_s: float) -> list[tuple[str, float]]:
+    """The response columns (summary.json's ``extremes``) whose peak |value| lies after
+    ``after_s``, with its time (columns at rest left out): none means the second half of a
+    tail raised no peak at all, the rule met without the rows; some means it may have."""
+    peaks = {}
+    for column, e in extremes.items():
+        if column.startswith(_NOT_RESPONSE) or "max" not in e:
+            continue
+        hi, lo = abs(e["max"]), abs(e["min"])
+        peaks[column] = (hi, e["time_of_max_s"]) if hi >= lo else (lo, e["time_of_min_s"])
+    largest: dict[str, float] = {}
+    for column, (value, _) in peaks.items():
+        largest[_unit(column)] = max(largest.get(_unit(column), 0.0), value)
+    return [(column, t) for column, (value, t) in peaks.items()
+            if t > after_s and value > _AT_REST * largest[_unit(column)]]
 
 
 def grown(time: np.ndarray, columns: dict[str, np.ndarray], split_s: float,

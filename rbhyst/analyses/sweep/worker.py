@@ -76,7 +76,7 @@ def run_case(base, key: str, values: dict, histories: bool = False) -> dict:
     tic = time.perf_counter()
     out: dict[str, Any] = {"key": key, "rbhyst_version": __version__}
     try:
-        result = run_deck(base.with_values(values), keep=histories)
+        result, late = run_to_rest(base.with_values(values), keep=histories)
     except (AnalysisError, InputError) as err:
         message = "; ".join(err.problems) if isinstance(err, InputError) else str(err)
         out.update(status="failed", message=message.replace("\n", " "), elapsed_s=time.perf_counter() - tic)
@@ -90,7 +90,7 @@ def run_case(base, key: str, values: dict, histories: bool = False) -> dict:
     accuracy = result.accuracy
     out.update(
         status="ok",
-        message="; ".join(result.warnings or []).replace("\n", " "),
+        message="; ".join((result.warnings or []) + late).replace("\n", " "),
         peaks=_finite(result.extremes.peaks()),
         energy=_finite({k: v for k, v in result.energy_summary().items() if k != "warn_above"}),
         accuracy=_finite(without_timings(flat_numbers(accuracy))) if accuracy else {},
@@ -113,6 +113,31 @@ def stroke_utilizations(elements: list[dict]) -> dict[str, float]:
             out[f"e{k}"] = e["stroke"]["utilization"]
         k += e["count"]
     return out
+
+
+def run_to_rest(deck, keep: bool):
+    """The case's run, and a line where its response may not have decayed: a deck that gives no
+    analysis.duration runs through its motion and the free vibration after it
+    (rbhyst.analyses.qualification.free_vibration: the first tail; the peaks include it)."""
+    import dataclasses
+
+    from rbhyst.analyses.qualification import free_vibration
+    from rbhyst.results import analysis
+    from rbhyst.solve.modes import initial_modes
+
+    system, settings = analysis.scene(deck)
+    end = system.excitation.duration
+    if settings.duration is not None or end is None:
+        return analysis.analyse(system, settings, keep=keep, spare_core=False), []
+    tail = free_vibration.tail_s(initial_modes(system).frequencies_hz)
+    result = analysis.analyse(system, dataclasses.replace(settings, duration=end + tail), keep=keep,
+                              spare_core=False)  # (its siblings take the other cores)
+    late = free_vibration.late_peaks(result.extremes.as_dict(), end + 0.5 * tail)
+    if not late:
+        return result, []
+    column, t = late[0]
+    return result, [f"the response may not have decayed {tail:.3g} s after the motion (a peak of {column} at "
+                    f"{t:.4g} s, in the last half): its peaks are those of the time it ran"]
 
 
 def run_deck(deck, keep: bool):
