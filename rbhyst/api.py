@@ -58,7 +58,7 @@ def run(deck: Deck | str | Path, integrator: str | None = None, dt: float | None
     from rbhyst.results.writers import CsvWriter
 
     planned = plan(system, settings)  # what can fail before a file is touched
-    early = planned.check_size(keep=False, folder=Path(out)) + replaced_results(Path(out), as_run)
+    early = planned.check_size(keep=False, folder=Path(out)) + replaced_results(Path(out), "run", as_run)
     for note in early if monitor is not None else ():
         monitor.note(note)
     draw = d.output.plots if plots is None else plots
@@ -81,17 +81,28 @@ def run(deck: Deck | str | Path, integrator: str | None = None, dt: float | None
     return result
 
 
-def replaced_results(folder: Path, as_run: dict) -> list[str]:
-    """A note where ``folder`` holds the results of another deck, which the run replaces (the
+def replaced_results(folder: Path, command: str = "run", as_run: dict | None = None) -> list[str]:
+    """A note where ``folder`` holds results that ``rbhyst command`` will replace: another
+    command's (by the files its manifest lists), or, for ``run``, another deck's (the
     summary.json rbhyst wrote there, its deck's title other than this one's: a deck edited and
     run again replaces its own results, as it is meant to)."""
     import json
 
+    from rbhyst.files.outdir import results_of
+
+    folder = Path(folder)
+    before = results_of(folder)
+    if before is None:
+        return []
+    if before != command:
+        return [f"{folder}: replaces the results of rbhyst {before} that were there"]
+    if command != "run" or as_run is None:
+        return []
     try:
-        before = json.loads((folder / "summary.json").read_text())
+        summary = json.loads((folder / "summary.json").read_text())
     except (OSError, ValueError):
         return []
-    deck = before.get("deck") if isinstance(before, dict) else None
+    deck = summary.get("deck") if isinstance(summary, dict) else None
     if not isinstance(deck, dict) or deck.get("title") == as_run.get("title"):
         return []
     old = deck.get("title") or "(untitled)"

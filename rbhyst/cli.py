@@ -21,7 +21,7 @@ app = typer.Typer(
     no_args_is_help=True,
     pretty_exceptions_enable=False,
     rich_markup_mode=None,  # help texts hold units in brackets ("[s]"), not markup
-    help="Nonlinear dynamics of 2D rigid bodies on Vaiana-Rosati hysteretic supports.",
+    help="Nonlinear dynamics of rigid bodies, in the plane or in space, on Vaiana-Rosati hysteretic supports.",
 )
 
 EXIT_INPUT = 2  # the user's deck or data is wrong
@@ -44,6 +44,15 @@ def user_errors():
     except AnalysisError as err:
         say(f"error: {err}")
         raise typer.Exit(EXIT_ANALYSIS) from None
+
+
+def say_replaced(target: Path, command: str) -> None:
+    """A note before ``command`` writes into a folder holding another command's results, which
+    it replaces (rbhyst run says so itself, deck by deck)."""
+    from rbhyst.api import replaced_results
+
+    for note in replaced_results(Path(target), command):
+        say(f"note: {note}")
 
 
 def _version(value: bool):
@@ -233,6 +242,7 @@ def calibrate_plot(
                    "protocol": None if measured is not None else (d.loops.model_dump() if d.loops else "default"),
                    "sets": {r.name: r.summary() for r in results}}
         target = out if out is not None else deck.parent / "results" / f"{deck.stem}-loops"
+        say_replaced(target, "calibrate-plot")
         files = safe_names(names)
         with staged_directory(target) as tmp:
             for r in results:
@@ -314,6 +324,7 @@ def calibrate(
             "start_log": fit.starts,
         }
         target = out if out is not None else data.parent / "results" / f"{data.stem}-calibrate"
+        say_replaced(target, "calibrate")
         with staged_directory(target) as tmp:
             (tmp / "fitted.toml").write_text(fragment, encoding="utf-8")
             write_json(report, tmp / "fit.json")
@@ -410,6 +421,7 @@ def study(
 
             result = run_study(system, settings, names, dts, progress=progress)
         target = out if out is not None else _sibling_dir(d, deck, "-study")
+        say_replaced(target, "study")
         with staged_directory(target) as tmp:
             write_csv(result, tmp / "study.csv")
             write_json(result, tmp / "study.json")
@@ -473,6 +485,7 @@ def sweep(
     with user_errors():
         sw = load_sweep(sweep_file)
         target = out if out is not None else sw.default_out()
+        say_replaced(target, "sweep")
         if report:
             from rbhyst.report.report_file import check_report_target
 
@@ -615,6 +628,7 @@ def spectrum(
                                   periods=_split_list(periods, "--periods", float), direction=direction,
                                   free_vibration=free_vibration)
         target = out if out is not None else record.parent / "results" / f"{record.stem}-spectrum"
+        say_replaced(target, "spectrum")
         with staged_directory(target) as tmp:
             write_spectra_csv(spectra, tmp / "spectra.csv")
             if plots:
@@ -676,6 +690,7 @@ def transmissibility(
 
             result = stepped_sine(d, direction, amplitudes, freqs, workers=workers, progress=progress)
         target = out if out is not None else _sibling_dir(d, deck, "-transmissibility")
+        say_replaced(target, "transmissibility")
         with staged_directory(target) as tmp:
             write_csv(result, tmp / "transmissibility.csv")
             write_json(result, tmp / "transmissibility.json")
@@ -784,6 +799,7 @@ def make_motion(
         options = {"--rrs": rrs, "--rrs-x2": rrs_x2, "--rrs-damping": rrs_damping, "--sds": sds,
                    "--z-over-h": z_over_h, "--level": level, "--duration": duration, "--dt": dt, "--seed": seed}
         mark = f"{MOTION_MARK} " + " ".join(f"{k} {shlex.quote(str(v))}" for k, v in options.items() if v is not None)
+        say_replaced(out, "make-motion")
         with staged_directory(out) as tmp:
             for m in made:
                 for axis in m.records:
@@ -856,6 +872,7 @@ def qualify(
                           "rrs_damping": rrs_damping, "motions": motions, "seed": seed, "duration": duration,
                           "motion_dt": motion_dt})
         target = out if out is not None else _sibling_dir(d, deck, "-qualify")
+        say_replaced(target, "qualify")
         check_free(target, output_files(req) + (["qualification.png"] if plots and d.output.plots else []))
         if report:
             from rbhyst.report.report_file import check_report_target

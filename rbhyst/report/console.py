@@ -112,4 +112,12 @@ def mode_table(modes: dict) -> list[str]:
         for row in table:
             lines.append("  " + "  ".join(c.rjust(w) for c, w in zip(row, widths)).rstrip())
         lines.extend(f"  {note}" for note in part.get("notes", ()))
+    if modes.get("at_rest"):
+        lines.extend(WHICH_MODES)
     return lines
+
+
+#: after the two tables of a body under gravity: what each is for
+WHICH_MODES = ("which to use: the modes at rest are those of the body as installed, its elements loaded by its weight",
+               "  (their loading tangents): compare them with the equipment's measured frequencies on its mounts;",
+               "  the initial ones (K0, independent of the load) are those Rayleigh damping and the integrators take.")
