@@ -55,6 +55,15 @@ def say_replaced(target: Path, command: str) -> None:
         say(f"note: {note}")
 
 
+def command_line(ctx: typer.Context) -> str:
+    """The command as run, quoted as a shell would need it to run it again (for the report)."""
+    import shlex
+
+    from rbhyst.terminal import ARGV
+
+    return shlex.join(["rbhyst", *ctx.meta.get(ARGV, [])])
+
+
 def _version(value: bool):
     if value:
         typer.echo(f"rbhyst {__version__}")
@@ -71,6 +80,7 @@ def _main(
 
 @app.command(cls=Command)
 def run(
+    ctx: typer.Context,
     deck: Annotated[Path, typer.Argument(help="TOML or YAML deck.")],
     out: Annotated[Optional[Path], typer.Option("--out", help="Output folder (default: the deck's).")] = None,
     integrator: Annotated[Optional[str], typer.Option(help="Override analysis.integrator.")] = None,
@@ -104,7 +114,7 @@ def run(
             with warnings.catch_warnings():  # (printed below as "warning: ..." lines: the API's are for Python)
                 warnings.simplefilter("ignore", RbhystWarning)
                 result = api.run(d, integrator=integrator, dt=dt, out=target, plots=plots and d.output.plots,
-                                 tolerance=tolerance, monitor=monitor)
+                                 tolerance=tolerance, monitor=monitor, command=command_line(ctx))
             if report:
                 from rbhyst.report.report_file import write_report
 
@@ -828,6 +838,7 @@ MOTION_MARK = "# rbhyst make-motion"
 
 @app.command(cls=Command)
 def qualify(
+    ctx: typer.Context,
     deck: Annotated[Path, typer.Argument(help="TOML or YAML deck (x1 horizontal, x2 vertical; in space x1 and x2 "
                                               "horizontal, x3 vertical), with a qualify section or the options "
                                               "below.")],
@@ -879,7 +890,8 @@ def qualify(
 
             check_report_target(target)
         with staged_directory(target) as tmp:
-            v = judge(d, req, tmp, integrator=integrator, dt=dt, tolerance=tolerance, say=say)
+            v = judge(d, req, tmp, integrator=integrator, dt=dt, tolerance=tolerance, say=say,
+                      command=command_line(ctx))
             if plots and d.output.plots:
                 from rbhyst.report.qualification import plot_verdict
 

@@ -14,11 +14,13 @@ import base64
 import csv
 import html
 import json
+from datetime import UTC, datetime
 from pathlib import Path
 
 from rbhyst._version import __version__
 from rbhyst.errors import InputError
 from rbhyst.model.deck import ACCEL_UNITS
+from rbhyst.report.signing import CSS as SIGNING_CSS, about, page_css, signature
 
 G = ACCEL_UNITS["g"]  # m/s2 (a g column beside m/s2 only; every value in m/s2 is summary.json's)
 
@@ -129,12 +131,14 @@ def items(lines: list[str], cls: str) -> str:
     return f'<ul class="{cls}">' + "".join(f"<li>{esc(x)}</li>" for x in lines) + "</ul>"
 
 
-def page(title: str, subtitle: str, body: list[str]) -> str:
+def page(title: str, subtitle: str, body: list[str], top: str = "", end: str = "") -> str:
+    """The whole page: ``top`` under the title (what it is about), ``body``, then ``end`` (the
+    signatures) before the footer; in print, each page numbered in its foot."""
     return ("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
             "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">"
-            f"<title>{esc(title)}</title><style>{CSS}</style></head><body>"
+            f"<title>{esc(title)}</title><style>{CSS}{SIGNING_CSS}{page_css(title)}</style></head><body>"
             f"<header><h1>{esc(title)}</h1><p class=\"sub\">{esc(subtitle)}</p></header>"
-            + "\n".join(body)
+            + top + "\n".join(body) + end
             + f"<footer>Written by rbhyst {esc(__version__)} from the files of this folder, as listed in "
               ".rbhyst.json: every number names the file it is read from, every figure is one of its PNGs.</footer>"
               "</body></html>\n")
@@ -229,7 +233,9 @@ def figure_names(folder: Path, owned: set[str], order: tuple[str, ...]) -> list[
 # ---------------------------------------------------------------- a run
 
 
-def run_report(folder: Path, owned: set[str]) -> str:
+def run_report(folder: Path, owned: set[str], written: datetime | None = None) -> str:
+    """A run's page from its summary.json and PNGs (``written``: the moment to say it was
+    written, default now)."""
     s = load_json(folder / "summary.json")
     src = "summary.json"
     peaks, ext = s.get("peaks", {}), s.get("extremes", {})
@@ -277,8 +283,10 @@ def run_report(folder: Path, owned: set[str]) -> str:
                    '<p class="muted">summary.json holds no deck (written by an older rbhyst).</p>')
                 + "</section>")
     title = s.get("title") or "rbhyst run"
+    fields = (deck or {}).get("report")
     return page(title, f"Time-history analysis, rbhyst {s.get('rbhyst_version', '')}: results in {folder.name}/",
-                body)
+                body, about(s.get("provenance"), fields, written or datetime.now(UTC), "summary.json"),
+                signature(fields))
 
 
 def _accuracy(acc: dict | None, en: dict) -> str:

@@ -9,10 +9,12 @@ run. Every number is qualification.json's or a run's summary.json's, as the file
 
 from __future__ import annotations
 
+from datetime import UTC, datetime
 from pathlib import Path
 
 from rbhyst.report.html import (esc, figure, figure_names, items, load_json, num, page, peaks_section, table,
                                 toml_text)
+from rbhyst.report.signing import about, signature
 
 SRC = "qualification.json"
 STANDARDS = {"ac156": "ICC-ES AC156", "ieee693": "IEEE 693"}
@@ -20,7 +22,9 @@ STANDARDS = {"ac156": "ICC-ES AC156", "ieee693": "IEEE 693"}
 RRS_POINTS_SHOWN = 16
 
 
-def qualification_report(folder: Path, owned: set[str]) -> str:
+def qualification_report(folder: Path, owned: set[str], written: datetime | None = None) -> str:
+    """A qualification's page from qualification.json, its runs' summary.json and its figure
+    (``written``: the moment to say it was written, default now)."""
     q = load_json(folder / SRC)
     runs = [(r["motion"], r["summary"], load_json(folder / r["summary"])) for r in q.get("runs", [])
             if r["summary"] in owned and (folder / r["summary"]).is_file()]
@@ -45,8 +49,10 @@ def qualification_report(folder: Path, owned: set[str]) -> str:
         body.append(peaks_section(s, src, f"{label}: peaks and extremes ({src})"))
     body.append(_deck(q))
     title = next((s.get("title") for _, _, s in runs if s.get("title")), None) or "rbhyst qualify"
+    fields = (q.get("deck_as_run") or {}).get("report")
     return page(title, f"Qualification to {standard}, rbhyst {q.get('rbhyst_version', '')}: results in "
-                       f"{folder.name}/", body)
+                       f"{folder.name}/", body,
+                about(q.get("provenance"), fields, written or datetime.now(UTC), SRC), signature(fields))
 
 
 def _caption(name: str) -> str:

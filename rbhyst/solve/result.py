@@ -68,6 +68,8 @@ class Result:
     #: (result, out, plots=) -> folder: what :meth:`write` calls (set by the pipeline above)
     writer: Callable | None = field(default=None, repr=False, compare=False)
     deck: dict | None = None  # the deck as run (its keys as given, the run's overrides applied)
+    #: when, by which rbhyst and command, from which files (rbhyst.files.provenance)
+    provenance: dict | None = None
     #: the kinematic model and the error it carries (rbhyst.solve.kinematic), when checked
     kinematics: dict | None = None
 
@@ -194,6 +196,7 @@ class Result:
             "warnings": list(self.warnings),
             **({"spectra": self.spectra.summary()} if self.spectra is not None else {}),
             **({"deck": self.deck} if self.deck is not None else {}),
+            **({"provenance": self.provenance} if self.provenance is not None else {}),
         }
 
     def energy_summary(self) -> dict:

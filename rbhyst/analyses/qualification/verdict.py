@@ -24,6 +24,7 @@ import numpy as np
 from rbhyst.analyses.qualification import matching
 from rbhyst.analyses.qualification.rrs import PLANE_AXES, SPACE_AXES, STANDARDS, G, RRS, requested_rrs
 from rbhyst.errors import InputError
+from rbhyst.model.inputs import deck_inputs, resolved
 
 #: from this many motions on the demand is the mean over them, below it the largest (ASCE 7-10 16.2.4)
 MEAN_FROM = 7
@@ -45,6 +46,8 @@ class Request:
     #: what each axis of the deck is: x1 horizontal, x2 vertical (PLANE_AXES); in space x1 and
     #: x2 horizontal, x3 vertical (SPACE_AXES)
     axes: dict = field(default_factory=lambda: dict(PLANE_AXES))
+    #: the RRS files read: (deck key or option, path, name as given), for the report's checksums
+    files: list = field(default_factory=list)
 
     @property
     def vertical(self) -> str:
@@ -112,9 +115,11 @@ def request(deck, cli: dict) -> Request:
                         "as vertical in space (the vertical spectrum drives x3)")
     if problems:
         raise InputError(problems)
+    files = [(keys[k], resolved(values[k], deck.base), values[k]) for k in ("rrs", "rrs_x2", "rrs_x3")
+             if standard is None and isinstance(values.get(k), str)]
     return Request(rrs, standard, motions, int(values.get("seed", 1)), float(values.get("duration", 30.0)),
                    float(values.get("motion_dt", 0.005)), values.get("acceleration_limit_g") or {},
-                   values.get("force_capacity_N"), dict(SPACE_AXES if space else PLANE_AXES))
+                   values.get("force_capacity_N"), dict(SPACE_AXES if space else PLANE_AXES), files)
 
 
 def output_files(req: Request) -> list[str]:
@@ -195,19 +200,22 @@ class Verdict:
 
 
 def qualify(deck, req: Request, folder: Path, integrator: str | None = None, dt: float | None = None,
-            tolerance: float | None = None, say=None) -> Verdict:
+            tolerance: float | None = None, say=None, command: str | None = None) -> Verdict:
     """Make or take the motions, run the deck on each, judge every criterion; write into ``folder``
     (a staging folder): qualification.json, trs.csv, motions.json (with motions made), the
     motions' records and run_<k>/summary.json (the plot is the caller's: report.qualification).
+    ``command``: the command line qualification.json's ``provenance`` records (None: Python).
 
     Long because it is the qualification's pipeline read top to bottom: the motions, their
     check, the runs, the criteria."""
     from rbhyst._version import __version__
+    from rbhyst.files.provenance import provenance
     from rbhyst.model.system import assemble
     from rbhyst.results.analysis import run_deck
     from rbhyst.results.writers import deck_as_run, write_summary
 
     folder = Path(folder).resolve()  # the runs' decks name the motions' files from their own folder
+    facts = provenance(command, qualification_inputs(deck, req))
     runs = []  # (label, summary dict)
     notes: list[str] = []
     motion_facts, checks = [], {axis: [] for axis in req.rrs}
@@ -281,6 +289,7 @@ def qualify(deck, req: Request, folder: Path, integrator: str | None = None, dt:
         "runs": [{"motion": label, "summary": f"run_{k}/summary.json"} for k, (label, _) in enumerate(runs, start=1)],
         # the deck as given, with the command's overrides (each made motion takes excitation.support's place)
         "deck_as_run": deck_as_run(deck, integrator=integrator, dt=dt, tolerance=tolerance),
+        "provenance": facts,
     }
     (folder / "qualification.json").write_text(json.dumps(data, indent=2) + "\n", encoding="utf-8")
     est = accuracy["estimated_error"]
@@ -289,6 +298,15 @@ def qualify(deck, req: Request, folder: Path, integrator: str | None = None, dt:
                f"(at most {100 * deck.analysis.warn_error:g} %)",
                f"warnings: {len(warnings) or 'none'}", data["statistic"])
     return Verdict(data, criteria, checks, heading)
+
+
+def qualification_inputs(deck, req: Request) -> list[tuple[str, Path, str]]:
+    """The files a qualification reads: the deck, the RRS files asked for (the deck's or the
+    command line's), the deck's records where its own motion is the test's, and its force files."""
+    own = [i for i in deck_inputs(deck) if not i[0].startswith("qualify.")
+           and (req.motions == "deck" or not i[0].startswith("excitation.support."))]
+    first = [i for i in own if i[0] == "deck"]
+    return first + req.files + [i for i in own if i[0] != "deck"]
 
 
 def _deck_trs(excitation, duration: float, rrs: dict[str, RRS]) -> dict:
