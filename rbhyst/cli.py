@@ -194,10 +194,15 @@ def run_line(result) -> str:
     e, s = result.extremes, result.settings
     g = ACCEL_UNITS["g"]
     coords = result.system.coordinates
-    at = ", ".join(f"|{c.key('at')}| = {e.peak(c.column('at')):.4g} m/s2 ({e.peak(c.column('at')) / g:.3g} g)"
+    rest = set(result.at_rest())  # (rounding, printed as 0)
+
+    def peak(column: str) -> float:
+        return 0.0 if column in rest else e.peak(column)
+
+    at = ", ".join(f"|{c.key('at')}| = {peak(c.column('at')):.4g} m/s2 ({peak(c.column('at')) / g:.3g} g)"
                    for c in coords if not c.rotation)
     method = s.integrator + (f" (rtol {s.rtol:g})" if s.integrator == "adaptive" else "")
-    motion = ", ".join(f"|{c.key('d')}| = {e.peak(c.column('d')):.4g} {c.d[1]}" for c in coords)
+    motion = ", ".join(f"|{c.key('d')}| = {peak(c.column('d')):.4g} {c.d[1]}" for c in coords)
     chosen = result.chosen
     steps = f"{result.steps} steps"
     if chosen is not None and s.integrator != "adaptive" and s.refine > 1:

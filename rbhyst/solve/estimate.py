@@ -499,6 +499,25 @@ def family_scales(peak: np.ndarray, keys, families, system: System) -> np.ndarra
     return top[family] / length
 
 
+def at_rest_columns(result) -> list[str]:
+    """The CSV columns a run leaves at rest: those whose peak over every step stays below
+    AT_REST of its family's scale (family_scales: G's motion with the points', a rotation at
+    the radius of gyration, forces with forces; the elements' deformations among themselves),
+    the rounding a symmetric scene leaves across its excitation (1e-17 m beside 1e-3 m): printed
+    as 0, never as a response. In the order of the columns; none without a layout."""
+    if result.layout is None:
+        return []
+    layout = result.layout
+    index = {name: i for i, name in enumerate(layout.names)}
+    cols = estimate_columns(layout) + [(f"e{k}_u", index[f"e{k}_u_m"], "eu")
+                                       for k in range(1, layout.system.n_output_elements + 1)]
+    keys, columns, families = [k for k, _, _ in cols], [c for _, c, _ in cols], [f for _, _, f in cols]
+    e = result.extremes
+    peaks = np.maximum(np.abs(e.max[columns]), np.abs(e.min[columns]))
+    scales = family_scales(peaks, keys, families, result.system)
+    return [layout.names[c] for c, p, f in sorted(zip(columns, peaks, scales)) if p < AT_REST * f]
+
+
 def ranked(errors: dict, limit: float, family: dict | None = None, quiet=()) -> list[tuple[str, float]]:
     """The columns above ``limit`` that matter, largest first in their family's terms: (key,
     error). A quiet column (family_terms) counts only where its error in its family's terms is

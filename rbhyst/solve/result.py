@@ -192,12 +192,20 @@ class Result:
             **({"kinematics": self.kinematics} if self.kinematics is not None else {}),
             "peaks": e.peaks(),
             "extremes": e.as_dict(),
+            "at_rest": self.at_rest(),
             "notes": list(self.notes),
             "warnings": list(self.warnings),
             **({"spectra": self.spectra.summary()} if self.spectra is not None else {}),
             **({"deck": self.deck} if self.deck is not None else {}),
             **({"provenance": self.provenance} if self.provenance is not None else {}),
         }
+
+    def at_rest(self) -> list[str]:
+        """The columns the run leaves at rest, to rounding (estimate.at_rest_columns): their peaks
+        are shown as 0."""
+        from rbhyst.solve.estimate import at_rest_columns
+
+        return at_rest_columns(self)
 
     def energy_summary(self) -> dict:
         """summary.json's ``energy``: the balance's error and the work of the load, the elements
