@@ -417,3 +417,22 @@ def test_a_browser_renders_it(which, run_folder, sweep_folder, qualification_fol
                    capture_output=True)
     pages = len(re.findall(rb"/Type\s*/Page[^s]", pdf.read_bytes()))
     assert pages >= 3
+
+
+def test_a_standard_s_spectrum_is_printed_to_the_digits_it_carries(qualification_folder, tmp_path):
+    """IEEE 693's plateau is 2.5 beta ZPA with beta(5 %) = (3.21 - 0.68 ln 5) / 2.1156 = 0.99999:
+    its constants carry no five digits, so the page says 1.25 g and 1 g, not 1.2499 g nor 0.99999 g."""
+    from rbhyst.analyses.qualification.rrs import ieee693
+
+    folder = tmp_path / "q"
+    shutil.copytree(qualification_folder, folder)
+    q = json.loads((folder / "qualification.json").read_text())
+    q["standard"] = "ieee693"
+    q["rrs"] = {axis: r.describe() for axis, r in ieee693("moderate", None).items()}
+    assert 0.99999 < q["rrs"]["x2"]["sa_g"][1] < 1.0 and 1.24998 < q["rrs"]["x1"]["sa_g"][1] < 1.25
+    (folder / "qualification.json").write_text(json.dumps(q, indent=2) + "\n")
+    assert invoke("report", folder)[0] == 0
+    page = check_page(folder)
+    shown = {a["data-src"]: v.strip() for a, v in page.numbers}
+    assert shown["qualification.json:rrs.x1.sa_g.1"] == "1.25" and shown["qualification.json:rrs.x2.sa_g.1"] == "1"
+    assert not re.search(r"0\.9999|1\.2499", " ".join(page.text))

@@ -92,10 +92,13 @@ def esc(x) -> str:
 
 
 def fmt(v: float, kind: str = "g") -> str:
-    """How a number reads: 5 significant digits (g), a percentage (pct), or 0 for a column the
-    run leaves at rest, to rounding (rest)."""
+    """How a number reads: 5 significant digits (g), 4 (g4: a required response spectrum, whose
+    standards' constants carry no more), a percentage (pct), or 0 for a column the run leaves at
+    rest, to rounding (rest)."""
     if kind == "pct":
         return f"{100 * v:.3g} %"
+    if kind == "g4":  # a value that carries four digits at most (a standard's spectrum: 1.25 g, not 1.2499 g)
+        return f"{v:.4g}"
     if kind == "rest":  # at rest to rounding (summary.json at_rest): no response to show
         return "0"
     if kind == "restpct":  # ... and its error, rounding too

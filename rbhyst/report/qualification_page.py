@@ -142,12 +142,12 @@ def _spectra(q: dict) -> str:
                 ["damping ratio", num(r.get("damping"), f"{p}.damping", "pct")],
                 ["band, times the RRS", f"{r['band'][0]:g} to {r['band'][1]:g}"],
                 ["check range [Hz]", f"{r['check_range_hz'][0]:g} to {r['check_range_hz'][1]:g}"],
-                ["least peak acceleration [g]", num(r.get("peak_min_g"), f"{p}.peak_min_g")]]
+                ["least peak acceleration [g]", num(r.get("peak_min_g"), f"{p}.peak_min_g", "g4")]]
         out.append(f"<h3>{esc(axis)}: {esc(r.get('name', ''))}</h3>" + table(["", ""], rows))
         freq, sa = r.get("frequency_hz", []), r.get("sa_g", [])
         if 0 < len(freq) <= RRS_POINTS_SHOWN:
             out.append(table(["RRS point", "frequency [Hz]", "spectral acceleration [g]"],
-                             [[str(k + 1), num(f, f"{p}.frequency_hz.{k}"), num(a, f"{p}.sa_g.{k}")]
+                             [[str(k + 1), num(f, f"{p}.frequency_hz.{k}"), num(a, f"{p}.sa_g.{k}", "g4")]
                               for k, (f, a) in enumerate(zip(freq, sa))], {1, 2}))
         elif freq:
             out.append(f'<p class="muted">The RRS has {len(freq)} points, {freq[0]:g} to {freq[-1]:g} Hz.</p>')
@@ -166,7 +166,7 @@ def _spectra(q: dict) -> str:
             rows.append([str(motion.get("number", m + 1)), axis, where,
                          num(t.get("min_ratio"), f"{tp}.min_ratio"), num(t.get("min_at_hz"), f"{tp}.min_at_hz"),
                          num(t.get("max_ratio"), f"{tp}.max_ratio"), num(t.get("max_at_hz"), f"{tp}.max_at_hz"),
-                         num(t.get("peak_g"), f"{tp}.peak_g"), num(t.get("peak_min_g"), f"{tp}.peak_min_g"),
+                         num(t.get("peak_g"), f"{tp}.peak_g"), num(t.get("peak_min_g"), f"{tp}.peak_min_g", "g4"),
                          '<td class="ok">yes</td>' if t.get("pass") else '<td class="bad">no</td>',
                          num(facts.get("strong_motion_s"), f"{p}.strong_motion_s")])
     every = " (trs.csv holds every frequency)" if any(_made(m) for m in q.get("motions", [])) else ""
