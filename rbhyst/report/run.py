@@ -156,9 +156,9 @@ def at_rest(ax, text: str, time_axis: bool = False) -> None:
 
 def family_scale(result: Result, family: str) -> dict[str, float]:
     """Each coordinate's column of ``family`` ("d" displacements, "at" total accelerations) and
-    the family's largest peak in that column's unit (estimate.family_scales: a rotation counted
+    the family's largest peak in that column's unit (scales.family_scales: a rotation counted
     at the body's radius of gyration)."""
-    from rbhyst.solve.estimate import family_scales
+    from rbhyst.solve.scales import family_scales
 
     coords = result.system.coordinates
     columns = [c.column(family) for c in coords]

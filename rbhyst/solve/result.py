@@ -201,9 +201,9 @@ class Result:
         }
 
     def at_rest(self) -> list[str]:
-        """The columns the run leaves at rest, to rounding (estimate.at_rest_columns): their peaks
+        """The columns the run leaves at rest, to rounding (scales.at_rest_columns): their peaks
         are shown as 0."""
-        from rbhyst.solve.estimate import at_rest_columns
+        from rbhyst.solve.scales import at_rest_columns
 
         return at_rest_columns(self)
 
