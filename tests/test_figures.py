@@ -55,3 +55,90 @@ def test_the_qualification_figure_reads_in_print(tmp_path, standard, space, moti
                                                                             for v in ticks), (axis, ticks)
         assert f"{plateau:.3g} g" in [t.get_text() for t in ax.texts]
         assert points_under_legend(ax) == 0
+
+
+# ------------------------------------------------------------------ a run's figures
+
+
+@pytest.fixture(scope="module")
+def shock(tmp_path_factory):
+    """A 10 g, 11 ms half-sine along x2 at 0.05 s of a 0.6 s run, a point at a corner."""
+    import rbhyst
+    from conftest import write_deck
+    from test_accelerations import pulse_deck
+
+    d = pulse_deck("half-sine")
+    d["output"] = {"points": [{"name": "P4", "point": [0.5, 0.5]}]}
+    return rbhyst.run(write_deck(tmp_path_factory.mktemp("shock"), d), estimate=False)
+
+
+def test_a_shock_s_support_motion_is_drawn_over_its_pulse_and_only_where_there_is_one(shock, tmp_path):
+    from rbhyst.report.run import plot_excitation
+
+    fig = plot_excitation(shock, tmp_path / "s.png")
+    (ax,) = fig.axes  # no empty ag1 panel
+    assert ax.get_ylabel().startswith("ag2") and "none along x1" in ax.get_title()
+    lo, hi = ax.get_xlim()
+    assert lo <= 0.05 and hi >= 0.061 and hi - lo <= 3 * 0.011  # the pulse fills the axis
+    (line,) = ax.lines
+    assert max(line.get_ydata()) == pytest.approx(10 * G, rel=1e-5)  # the signal's own peak, not the rows'
+    assert overlapping_titles(fig) == []
+
+
+def test_displacements_are_drawn_in_mm_without_an_offset(shock, tmp_path):
+    from figure_checks import drawn
+    from rbhyst.report.run import plot_point, plot_response
+
+    for fig in (plot_response(shock, 1, tmp_path / "r.png"), plot_point(shock, "P4", tmp_path / "p.png")):
+        drawn(fig)
+        shown = [ax for ax in fig.axes if ax.get_ylabel().startswith("u2")]
+        assert shown and all(ax.get_ylabel() == "u2 [mm]" for ax in shown)
+        for ax in shown:
+            assert ax.yaxis.get_offset_text().get_text() == ""  # no "1e-3" above the axis
+            top = max(abs(y) for line in ax.lines for y in line.get_ydata())
+            peak = shock.extremes.peak("u2_m" if fig.axes[0] is ax else "P4_u2_m")
+            assert top == pytest.approx(1e3 * peak, rel=1e-9)
+
+
+def test_the_energy_legend_is_beside_the_curves(shock, tmp_path):
+    from figure_checks import drawn
+    from rbhyst.report.run import plot_energy
+
+    fig = drawn(plot_energy(shock, tmp_path / "e.png"))
+    ax = fig.axes[0]
+    box = ax.get_legend().get_window_extent(fig.canvas.get_renderer())
+    assert points_under_legend(ax) == 0 and box.x0 > ax.get_window_extent().x1  # beside, not on, the input
+    assert box.x1 <= fig.bbox.x1 and box.y0 >= fig.bbox.y0  # and whole on the figure
+
+
+def test_loops_set_their_own_axis_not_the_strokes(tmp_path):
+    """+-5 mm loops under +-60 mm strokes fill their panel, the strokes said in the legend; a
+    stroke within reach (+5 mm of a 14 mm loop) is drawn."""
+    import rbhyst
+    from conftest import square_linear_deck, write_deck
+    from rbhyst.report.run import plot_element_loops
+
+    d = square_linear_deck()
+    branch = {"kb": 2e5, "f0": 300.0, "alpha": 800.0, "beta1": 0.0, "beta2": 0.0}
+    d["hysteresis"] = {"w": {"loading": branch, "unloading": branch}}
+    for e in d["elements"]:
+        e.update(hysteresis="w", stroke=0.06)
+    d["elements"][2]["stroke"] = [-0.06, 0.005]
+    d["excitation"] = {"support": {
+        "x1": {"type": "sine", "amplitude": 0.3, "frequency_hz": 3.0, "units": "g", "cycles": 4},
+        "x2": {"type": "sine", "amplitude": 0.3, "frequency_hz": 4.0, "units": "g", "cycles": 4}}}
+    d["analysis"] = {"dt": 0.001, "duration": 2.0}
+    res = rbhyst.run(write_deck(tmp_path, d), estimate=False)
+    fig = plot_element_loops(res, tmp_path / "l.png")
+    for k, ax in enumerate(fig.axes[:4], start=1):
+        e = res.extremes
+        i = res.columns.index(f"e{k}_u_m")
+        span = 1e3 * (e.max[i] - e.min[i])
+        lo, hi = ax.get_xlim()
+        assert lo <= 1e3 * e.min[i] and hi >= 1e3 * e.max[i]
+        texts = " ".join(t.get_text() for t in ax.get_legend().get_texts())
+        if k == 3:
+            assert span > 20 and lo <= 5.0 <= hi and "one beyond the axis" in texts
+            assert any(list(line.get_xdata()) == [5.0, 5.0] for line in ax.lines)
+        else:
+            assert 5 < span < 40 and hi - lo <= 1.3 * span and "beyond the axis" in texts  # (strokes span 120 mm)
