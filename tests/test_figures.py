@@ -142,3 +142,24 @@ def test_loops_set_their_own_axis_not_the_strokes(tmp_path):
             assert any(list(line.get_xdata()) == [5.0, 5.0] for line in ax.lines)
         else:
             assert 5 < span < 40 and hi - lo <= 1.3 * span and "beyond the axis" in texts  # (strokes span 120 mm)
+
+
+def test_spectra_keep_g_in_sight_and_break_their_title_between_phrases(tmp_path):
+    """G's curve is a band under the points' lines (a point moving nearly as G does would hide
+    a line of G's width); the title's lines break after a clause or before a parenthesis, never
+    inside "sa at most 3.7e-14 m/s²"."""
+    from rbhyst.report.spectra import plot_spectra
+    from test_plots import _pulse_along_x2
+
+    spectra = _pulse_along_x2(tmp_path)
+    fig = plot_spectra(spectra, tmp_path / "spectra.png",
+                       title="a cabinet on four wire rope isolators under a 10 g half-sine pulse of 11 ms along x2")
+    ax = fig.axes[0]
+    lines = {line.get_label(): line for line in ax.lines}
+    g, top = lines["G (mass centre)"], lines["top"]
+    assert g.get_zorder() < top.get_zorder() and g.get_linewidth() >= 2.5 * top.get_linewidth()
+    title = fig._suptitle.get_text().split("\n")
+    assert len(title) >= 3 and "sa at most" in " ".join(title)
+    for line, after in zip(title, title[1:]):  # (each of the title's own lines starts one)
+        assert line.endswith((":", ",", ";")) or after.startswith(("(", "damping", "no response")), title
+    assert overlapping_titles(fig) == []

@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import textwrap
 from pathlib import Path
 
 import numpy as np
@@ -25,6 +24,23 @@ def shown_directions(spectra: LocatedSpectra) -> tuple[list[str], dict[str, floa
         return directions, {}
     dropped = {d: v for d, v in largest.items() if v < NEGLIGIBLE * top}
     return [d for d in directions if d not in dropped], dropped
+
+
+def phrase_wrap(line: str, width: int) -> str:
+    """``line`` in lines of at most about ``width`` characters, broken only between its phrases
+    (after ": ", ", ", "; " or before " ("), never inside one: "no response along x1 (sa at most
+    3.7e-14 m/s², ..." keeps "sa at most 3.7e-14 m/s²" whole."""
+    import re
+
+    pieces = re.split(r"(?<=[:;,]) | (?=\()", line)
+    out, current = [], ""
+    for piece in pieces:
+        if current and len(current) + 1 + len(piece) > width:
+            out.append(current)
+            current = piece
+        else:
+            current = f"{current} {piece}" if current else piece
+    return "\n".join(out + [current])
 
 
 @styled
@@ -53,8 +69,12 @@ def plot_spectra(spectra: LocatedSpectra, path: Path, title: str = ""):
                 label = ("ground" if loc == GROUND else "G (mass centre)" if loc == CENTRE else loc)
                 if len(s.dampings) > 1:
                     label += f", ζ = {zeta:g}"
+                # G a broad light band under the points' lines: a point near G (or moving as G does)
+                # would hide it otherwise
                 ax.plot(f[order], sa[order, j], color=colours[loc], ls=DAMPING_STYLES[j % len(DAMPING_STYLES)],
-                        lw=1.6 if loc == GROUND else 1.1, zorder=3 if loc == GROUND else 2, label=label)
+                        lw={GROUND: 1.6, CENTRE: 3.2}.get(loc, 1.1), alpha=0.45 if loc == CENTRE else 1.0,
+                        zorder={GROUND: 3, CENTRE: 1.5}.get(loc, 2), label=label,
+                        solid_capstyle="butt")
         ax.set_xscale("log")
         ax.set_yscale("log")
         nyquist = spectra.nyquist_hz(direction)
@@ -78,6 +98,6 @@ def plot_spectra(spectra: LocatedSpectra, path: Path, title: str = ""):
     lines = [heading, f"damping {damping}"]
     lines += [f"no response along {d} (sa at most {v:.2g} m/s², below {plain_number(NEGLIGIBLE)} of the largest: "
               "rounding)" for d, v in dropped.items()]
-    fig.suptitle("\n".join(textwrap.fill(line, int(13 * width)) for line in lines), fontsize=9)
+    fig.suptitle("\n".join(phrase_wrap(line, int(13 * width)) for line in lines), fontsize=9)
     save(fig, path)
     return fig
