@@ -163,3 +163,63 @@ def test_spectra_keep_g_in_sight_and_break_their_title_between_phrases(tmp_path)
     for line, after in zip(title, title[1:]):  # (each of the title's own lines starts one)
         assert line.endswith((":", ",", ";")) or after.startswith(("(", "damping", "no response")), title
     assert overlapping_titles(fig) == []
+
+
+# ------------------------------------------------------------------ the analyses' figures
+
+
+def test_measured_loops_are_drawn_as_loops_not_a_cloud(tmp_path):
+    """The test data a line through every point in the order measured, markers on some."""
+    from conftest import DECKS
+    from rbhyst.analyses.calibration import loop_result, protocol
+    from rbhyst.model.deck import Loops, load_deck
+    from rbhyst.report.loops import plot_loops
+
+    deck = load_deck(DECKS / "seed_fig4_loops.toml")
+    _, u = protocol(Loops(amplitude=[0.004, 0.008], cycles=2, points_per_cycle=400))
+    p = deck.hysteresis["wri_shear"].array()
+    measured = loop_result("s", p, u).f * 1.05
+    fig = plot_loops([loop_result("wri_shear", p, u, measured)], tmp_path / "loops.png")
+    (data,) = [line for line in fig.axes[0].lines if line.get_label() == "test data"]
+    assert data.get_linestyle() not in ("None", "none", "") and data.get_linewidth() > 0
+    assert len(data.get_xdata()) == len(u)  # every point joined, in order
+    assert np.allclose(data.get_ydata(), measured * 1e-3)
+
+
+def test_transmissibility_s_legend_is_under_the_panels(tmp_path):
+    from figure_checks import drawn
+    from rbhyst.report.transmissibility import plot_transmissibility
+
+    f = np.geomspace(0.5, 20.0, 8)
+    table = np.array([[fi, a, 1.0 / abs(1 - (fi / 5.0) ** 2 + 0.1j * fi / 5.0), 1e-3 * fi]
+                      for a in (0.5, 2.0) for fi in f])
+    result = SimpleNamespace(table=lambda: table, columns=["T_G_x1", "T_G_x2"], direction="x1")
+    fig = drawn(plot_transmissibility(result, tmp_path / "t.png", title="a cabinet"))
+    ax = fig.axes[0]
+    assert ax.get_legend() is None and len(fig.legends) == 1
+    box = fig.legends[0].get_window_extent(fig.canvas.get_renderer())
+    assert box.y1 <= ax.get_window_extent().y0  # under the panel, covering no curve
+    assert len(fig.legends[0].get_texts()) == 4  # two amplitudes, along and across
+
+
+def test_fragility_draws_every_stripe_s_count_and_names_an_unfitted_combination(tmp_path):
+    """Two vary combinations, one fitted, one not: each stripe's count (3/7) is written for both,
+    and the unfitted one's markers have their legend entry."""
+    from rbhyst.report.fragility import plot_fragility
+
+    state = SimpleNamespace(name="LS1", quantity="peak_at1_m_s2", limit=5.0)
+    x = np.array([0.2, 0.4, 0.6])
+    common = dict(limit_state=state, x=x, n=np.array([7, 7, 7]), band=None, identified=0,
+                  grid=np.linspace(0.01, 0.8, 50))
+    fitted = SimpleNamespace(group=(1,), fitted=True, median=0.4, beta=0.3, message="", z=np.array([1, 3, 6]),
+                             **common)
+    refused = SimpleNamespace(group=(2,), fitted=False, median=None, beta=None, z=np.array([0, 0, 0]),
+                              message="no case reaches it", **common)
+    fig = plot_fragility([fitted, refused], "Sa [g]", ["body.mass"], tmp_path / "f.png")
+    ax = fig.axes[0]
+    counts = [t.get_text() for t in ax.texts if "/" in t.get_text()]
+    assert sorted(counts) == sorted(["1/7", "3/7", "6/7", "0/7", "0/7", "0/7"])
+    labels = [t.get_text() for t in ax.get_legend().get_texts()]
+    assert any(label.startswith("body.mass = 2") and "not fitted" in label for label in labels)
+    assert any(label.startswith("body.mass = 1") for label in labels)
+    assert points_under_legend(ax) == 0

@@ -21,7 +21,7 @@ def _line(ax, label):
 # ---------------------------------------------------------------- loops.png
 
 
-def test_measured_loop_is_drawn_over_the_fit_as_markers(tmp_path):
+def test_measured_loop_is_drawn_over_the_fit_as_a_line_with_markers(tmp_path):
     from rbhyst.report.loops import plot_loops
 
     p = parameter_set({"kb": 2e5, "f0": 1e3, "alpha": 700.0}, {"kb": 2e5, "f0": 1e3, "alpha": 700.0})
@@ -32,7 +32,9 @@ def test_measured_loop_is_drawn_over_the_fit_as_markers(tmp_path):
     ax = fig.axes[0]
     data, fit = _line(ax, "test data"), _line(ax, "VRM fit")
     assert data.get_zorder() > fit.get_zorder()
-    assert data.get_marker() not in (None, "None", "", " ") and data.get_linestyle() in ("None", "", " ")
+    # markers on a thin line through every point: loops, not a cloud of 300 markers
+    assert data.get_marker() not in (None, "None", "", " ") and data.get_linestyle() not in ("None", "", " ")
+    assert data.get_linewidth() < fit.get_linewidth()
     assert data.get_color() != fit.get_color()
     assert (tmp_path / "loops.png").stat().st_size > 0
 
