@@ -223,3 +223,65 @@ def test_fragility_draws_every_stripe_s_count_and_names_an_unfitted_combination(
     assert any(label.startswith("body.mass = 2") and "not fitted" in label for label in labels)
     assert any(label.startswith("body.mass = 1") for label in labels)
     assert points_under_legend(ax) == 0
+
+
+# ------------------------------------------------------------------ model.png
+
+
+def _labels_clear(ax, skip=()) -> tuple[list[str], list, list]:
+    """The axes' labels, the pairs of them that overlap and those that cross a drawn line."""
+    from test_plots import _boxes_overlap, _drawn, _line_points
+
+    renderer = _drawn(ax.figure)
+    texts = [t for t in ax.texts if t.get_text() and not t.get_text().startswith(skip)]
+    names = [t.get_text() for t in texts]
+    boxes = [t.get_window_extent(renderer) for t in texts]
+    clashes = [(names[i], names[j]) for i in range(len(boxes)) for j in range(i) if _boxes_overlap(boxes[i], boxes[j])]
+    points = _line_points(ax)
+    crossed = [n for n, b in zip(names, boxes)
+               if np.any((points[:, 0] > b.x0 + 1) & (points[:, 0] < b.x1 - 1) & (points[:, 1] > b.y0 + 1)
+                         & (points[:, 1] < b.y1 - 1))]
+    return names, clashes, crossed
+
+
+def test_the_plane_model_draws_and_names_its_points_of_interest(tmp_path):
+    import shutil
+    import tomllib
+
+    import rbhyst
+    from conftest import DECKS, write_deck
+    from rbhyst.report.run import plot_body
+
+    shutil.copytree(DECKS / "records", tmp_path / "records")
+    d = tomllib.loads((DECKS / "seed_wri.toml").read_text())
+    d["analysis"].update(duration=0.05, estimate_error=False)
+    d["output"] = {"points": [{"name": "top", "point": [-0.1286, 1.0571]}, {"name": "near", "point": [0.02, 0.75]}]}
+    res = rbhyst.run(write_deck(tmp_path, d))
+    ax = plot_body(res, tmp_path / "model.png").axes[0]
+    for name, x in res.layout.points:  # a marker at each point (about G), named
+        assert any(np.allclose(np.column_stack([line.get_xdata(), line.get_ydata()]), [x[:2]]) for line in ax.lines)
+    names, clashes, crossed = _labels_clear(ax, skip=("part",))
+    assert {"top", "near", "G"} <= set(names) and not clashes and not crossed
+
+
+def test_the_space_model_s_isometric_view_is_large_and_its_labels_clear(tmp_path):
+    import shutil
+    import tomllib
+
+    import rbhyst
+    from conftest import DECKS, write_deck
+    from rbhyst.report.model3d import plot_body_3d
+
+    shutil.copytree(DECKS / "records", tmp_path / "records")
+    d = tomllib.loads((DECKS / "cabinet_3d.toml").read_text())
+    d["analysis"].update(duration=0.05, estimate_error=False)
+    res = rbhyst.run(write_deck(tmp_path, d))
+    fig = plot_body_3d(res, tmp_path / "model.png")
+    iso = next(ax for ax in fig.axes if ax.get_title() == "isometric")
+    area = {ax.get_title(): ax.get_position().width * ax.get_position().height for ax in fig.axes}
+    assert all(area["isometric"] >= 2.5 * a for t, a in area.items() if t != "isometric")
+    names, clashes, crossed = _labels_clear(iso)
+    n = sum(el.count for el in res.system.elements)
+    assert {f"e{k}" for k in range(1, n + 1)} | {"G", "x1", "x2", "x3"} <= set(names)
+    assert not clashes and not crossed
+    assert overlapping_titles(fig) == []

@@ -41,8 +41,8 @@ def _shares_line(dp, elements) -> bool:
 
 @styled
 def plot_body(result: Result, path: Path):
-    """The body (every part, the denser darker, with its mass), its mass centre G and its
-    elements (seed Fig. 3a); a damper on an element's line is drawn beside it, in parallel;
+    """The body (every part, the denser darker, with its mass), its mass centre G, its points of
+    interest and its elements (seed Fig. 3a); a damper on an element's line is drawn beside it, in parallel;
     no label covers another (rbhyst.report._labels). Returns the figure (saved to ``path``).
 
     Long because every mark drawn is registered with one label placer, so that no label covers another.
@@ -105,9 +105,13 @@ def plot_body(result: Result, path: Path):
         labels.point(*mid, 2.5)
         labels.add(f"d{k}" + (f" x{dp.count}" if dp.count > 1 else ""), mid, (nx, ny), 4.5, fontsize=7,
                    color="C2")  # off its side, away from the element
+    for name, x in result.layout.points:  # the points of interest (about G), as model3d draws them
+        ax.plot(x[0], x[1], marker="o", ms=5, mfc="white", mec="C1", mew=1.4, zorder=5)
+        labels.point(x[0], x[1], 3.5)
+        labels.add(name, (x[0], x[1]), (x[0] or 1.0, x[1] or 1.0), 4.5, fontsize=7.5, color="C1")
     labels.pending += vertex_labels.pending
     labels.lines += vertex_labels.lines
-    labels.add("G", (0.0, 0.0), (1.0, -1.0), 5.0, fontsize=9)
+    labels.add("G", (0.0, 0.0), (1.0, -1.0), 6.5, fontsize=9)
     ex = result.system.excitation
     if ex.p1 is not None or ex.p2 is not None or ex.m3 is not None:
         ax.plot(*ex.point, marker="*", color="C3", ms=12, zorder=5)
