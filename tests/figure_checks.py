@@ -8,8 +8,10 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.text import Text
 
-#: A4 less the report's margins (inches): a wider figure is shrunk to it in print
-A4_WIDTH = 7.3
+#: A4 less the report's margins (inches): a wider figure is shrunk to it in print, a taller one
+#: than A4_HEIGHT to that; a narrower one is printed at its pixels' CSS size (96 a CSS inch),
+#: up to A4_WIDTH
+A4_WIDTH, A4_HEIGHT = 7.3, 235 / 25.4
 
 
 def drawn(fig):
@@ -33,9 +35,22 @@ def overlapping_titles(fig) -> list[tuple[str, str]]:
     return [(a, b) for i, (a, p) in enumerate(boxes) for b, q in boxes[i + 1:] if p.overlaps(q)]
 
 
+def print_scale(fig) -> float:
+    """What printing report.html on A4 multiplies the figure's sizes by (its CSS: max-width 100 %,
+    max-height 235 mm, otherwise the PNG's pixels at 96 a CSS inch)."""
+    import matplotlib
+
+    from rbhyst.report._style import STYLE
+
+    w, h = fig.get_size_inches()
+    dpi = STYLE.get("savefig.dpi", matplotlib.rcParams["savefig.dpi"])
+    natural = dpi / 96.0
+    return min(natural, A4_WIDTH / w, A4_HEIGHT / h)
+
+
 def smallest_print_pt(fig) -> float:
-    """The smallest text of the figure in points once printed A4_WIDTH wide (or at its size)."""
-    shrink = min(1.0, A4_WIDTH / fig.get_size_inches()[0])
+    """The smallest text of the figure in points once report.html is printed on A4."""
+    shrink = print_scale(fig)
     sizes = [t.get_fontsize() for t in fig.findobj(Text) if t.get_visible() and t.get_text().strip()]
     return min(sizes) * shrink
 

@@ -285,3 +285,31 @@ def test_the_space_model_s_isometric_view_is_large_and_its_labels_clear(tmp_path
     assert {f"e{k}" for k in range(1, n + 1)} | {"G", "x1", "x2", "x3"} <= set(names)
     assert not clashes and not crossed
     assert overlapping_titles(fig) == []
+
+
+def test_every_figure_of_a_run_reads_in_print(tmp_path):
+    """Printed from report.html on A4 (shrunk to the page's width and height, or at its pixels'
+    size), no text of a run's figures is below 7.9 pt (the spectra's and loops' were 4.7 and 4.9)."""
+    import shutil
+    import tomllib
+
+    import rbhyst
+    from conftest import DECKS, write_deck
+    from rbhyst.report import run as figures
+    from rbhyst.report.spectra import plot_spectra
+
+    shutil.copytree(DECKS / "records", tmp_path / "records")
+    d = tomllib.loads((DECKS / "seed_wri.toml").read_text())
+    d["analysis"].update(duration=1.0, estimate_error=False)
+    d["elements"][0]["stroke"] = 0.004
+    d["output"] = {"points": [{"name": "top", "point": [-0.1286, 1.0571]}], "spectra": {"damping": [0.02, 0.05]}}
+    res = rbhyst.run(write_deck(tmp_path, d))
+    made = {"model": figures.plot_body(res, tmp_path / "m.png"),
+            "support": figures.plot_excitation(res, tmp_path / "s.png"),
+            "x1": figures.plot_response(res, 0, tmp_path / "x.png"),
+            "point": figures.plot_point(res, "top", tmp_path / "p.png"),
+            "loops": figures.plot_element_loops(res, tmp_path / "l.png"),
+            "energy": figures.plot_energy(res, tmp_path / "e.png"),
+            "spectra": plot_spectra(res.spectra, tmp_path / "sp.png", title="seed")}
+    small = {k: round(smallest_print_pt(f), 2) for k, f in made.items() if smallest_print_pt(f) < 7.9}
+    assert small == {}

@@ -8,7 +8,7 @@ from pathlib import Path
 import numpy as np
 from matplotlib.ticker import FuncFormatter
 
-from ._style import save, styled, subplots, write_png
+from ._style import PRINT_HEIGHT, PRINT_WIDTH, save, styled, subplots, write_png
 
 G_STANDARD = 9.80665
 AXIS_NAMES = {"x1": "x1 (horizontal)", "x2": "x2 (vertical)"}
@@ -19,8 +19,6 @@ SPACE_AXIS_NAMES = {"x1": "x1 (horizontal)", "x2": "x2 (horizontal)", "x3": "x3 
 #: the narrowest a text may print on A4 (points): figures are drawn at most PRINT_WIDTH wide, their
 #: texts at least this large, so that print does not shrink them below it
 PRINT_PT = 8.0
-#: A4 less the report's margins, inches (what a figure prints at, at most)
-PRINT_WIDTH = 7.3
 #: a log axis spanning at most about a decade is labelled at these multiples of its powers of ten
 #: (the plateaus of the standards, 1.25 g and 1.92 g, read between 1.2 and 1.5, 1.5 and 2)
 FINE_SUBS = (1.0, 1.2, 1.5, 2.0, 2.5, 3.0, 4.0, 5.0, 6.0, 8.0)
@@ -40,7 +38,8 @@ def log_ticks(axis, lo: float, hi: float) -> None:
     axis.set_minor_formatter(NullFormatter())
 
 
-def _trs_panel(ax, axis: str, rrs, checks: list[tuple[str, object]], names: dict = AXIS_NAMES) -> None:
+def _trs_panel(ax, axis: str, rrs, checks: list[tuple[str, object]], names: dict = AXIS_NAMES,
+               pt: float = PRINT_PT) -> None:
     """RRS (black, its plateau's value written on it), its band over the checked range (shaded),
     each motion's TRS (colour, a dot at every checked frequency, red where outside the band)."""
     lo, hi = rrs.check_range
@@ -60,7 +59,7 @@ def _trs_panel(ax, axis: str, rrs, checks: list[tuple[str, object]], names: dict
             ax.plot(c.frequency_hz[bad], c.trs[bad] / G_STANDARD, "o", color="red", ms=5, mfc="none", zorder=5)
     top = int(np.argmax(curve))  # the plateau's start: its value said where it is
     ax.annotate(f"{curve[top]:.3g} g", (f[top], curve[top]), textcoords="offset points", xytext=(-4, -10),
-                ha="right", fontsize=PRINT_PT)
+                ha="right", fontsize=pt)
     ax.axvline(lo, color="0.5", lw=0.6, ls=":")
     ax.axvline(hi, color="0.5", lw=0.6, ls=":")
     ax.set_xscale("log")
@@ -77,12 +76,12 @@ def _trs_panel(ax, axis: str, rrs, checks: list[tuple[str, object]], names: dict
     plain = FuncFormatter(lambda v, _: f"{v:g}")
     ax.xaxis.set_major_formatter(plain)
     ax.xaxis.set_minor_formatter(FuncFormatter(lambda v, _: f"{v:g}" if f"{v:.1e}"[0] in "25" else ""))
-    ax.tick_params(which="both", labelsize=PRINT_PT)
-    ax.set_xlabel("frequency [Hz]")
-    ax.set_ylabel("spectral acceleration [g]")
-    ax.set_title(f"{names.get(axis, axis)}\n{rrs.name}", fontsize=PRINT_PT)
+    ax.tick_params(which="both", labelsize=pt)
+    ax.set_xlabel("frequency [Hz]", fontsize=max(9.0, pt))
+    ax.set_ylabel("spectral acceleration [g]", fontsize=max(9.0, pt))
+    ax.set_title(f"{names.get(axis, axis)}\n{rrs.name}", fontsize=pt)
     ax.grid(True, which="both", alpha=0.25)
-    ax.legend(fontsize=PRINT_PT, loc="lower center", ncol=ncol)
+    ax.legend(fontsize=pt, loc="lower center", ncol=ncol)
 
 
 @styled
@@ -112,11 +111,14 @@ def plot_verdict(checks: dict, rrs: dict, criteria: list[dict], passed: bool, pa
     cols = min(2, max(1, len(rrs)))
     rows = -(-max(1, len(rrs)) // cols)
     n_crit = max(1, len(criteria))
-    bars = 0.9 + 0.25 * n_crit
-    fig = Figure(figsize=(PRINT_WIDTH, 0.6 + 3.6 * rows + bars), layout="constrained")
-    grid = fig.add_gridspec(rows + 1, cols, height_ratios=[3.6] * rows + [bars])
+    bars = 0.9 + 0.22 * n_crit
+    height = 0.6 + 3.4 * rows + bars
+    # taller than a page, print shrinks it: its texts are drawn larger by as much
+    pt = PRINT_PT / min(1.0, PRINT_HEIGHT / height)
+    fig = Figure(figsize=(PRINT_WIDTH, height), layout="constrained")
+    grid = fig.add_gridspec(rows + 1, cols, height_ratios=[3.4] * rows + [bars])
     for k, axis in enumerate(rrs):
-        _trs_panel(fig.add_subplot(grid[k // cols, k % cols]), axis, rrs[axis], checks.get(axis, []), names)
+        _trs_panel(fig.add_subplot(grid[k // cols, k % cols]), axis, rrs[axis], checks.get(axis, []), names, pt)
     ax = fig.add_subplot(grid[rows, :])
     labels = [c["label"] for c in criteria]
     use = np.array([c["demand"] / c["capacity"] for c in criteria]) if criteria else np.zeros(0)
@@ -124,17 +126,17 @@ def plot_verdict(checks: dict, rrs: dict, criteria: list[dict], passed: bool, pa
     ax.barh(y, use, color=["#2e8b57" if c["pass"] else "#c0392b" for c in criteria], height=0.6)
     for yi, c, u in zip(y, criteria, use):
         ax.annotate(f"{_number(c['demand'])} / {_number(c['capacity'])} {c['unit']}", (u, yi),
-                    textcoords="offset points", xytext=(4, -3), fontsize=PRINT_PT)
+                    textcoords="offset points", xytext=(4, -3), fontsize=pt)
     ax.axvline(1.0, color="k", lw=1.0)
     ax.set_yticks(y, labels)
-    ax.tick_params(labelsize=PRINT_PT)
+    ax.tick_params(labelsize=pt)
     ax.set_xlim(0.0, max(1.25, float(use.max()) * 1.3 if len(use) else 1.25))
-    ax.set_xlabel("demand / capacity")
+    ax.set_xlabel("demand / capacity", fontsize=max(9.0, pt))
     if notes:
-        ax.set_title("; ".join(notes), fontsize=PRINT_PT, wrap=True)
+        ax.set_title("; ".join(notes), fontsize=pt, wrap=True)
     ax.grid(True, axis="x", alpha=0.3)
     verdict = "PASS" if passed else "FAIL"
-    fig.suptitle(f"Qualification: {verdict}" + (f" — {title}" if title else ""), fontsize=10, wrap=True,
+    fig.suptitle(f"Qualification: {verdict}" + (f" — {title}" if title else ""), fontsize=max(10.0, pt + 1.0), wrap=True,
                  color="#2e8b57" if passed else "#c0392b")
     write_png(fig, path)
     return fig

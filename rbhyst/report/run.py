@@ -10,7 +10,7 @@ from matplotlib.ticker import MaxNLocator
 
 from rbhyst.solve.result import Result
 from rbhyst.report._labels import Labels
-from rbhyst.report._style import NEGLIGIBLE, TIME_MARGINS, plain_number, save, styled, subplots, write_png
+from rbhyst.report._style import NEGLIGIBLE, PRINT_WIDTH, TIME_MARGINS, plain_number, save, styled, subplots, write_png
 
 
 def _draw_outline(ax, v: np.ndarray, fill_alpha: float, labels: list[str], placer: Labels) -> None:
@@ -186,7 +186,7 @@ def plot_excitation(result: Result, path: Path):
     drawn = [n for n in names if signals[n] is not None] or names
     run = result.stats.steps * result.settings.dt  # s
     window = short_motion([signals[n] for n in drawn], run)
-    fig, axes = subplots(len(drawn), 1, figsize=(8, 2.25 * len(drawn) if len(drawn) > 1 else 2.8), sharex=True,
+    fig, axes = subplots(len(drawn), 1, figsize=(PRINT_WIDTH, 2.25 * len(drawn) if len(drawn) > 1 else 2.8), sharex=True,
                          squeeze=False)
     axes = axes[:, 0]
     for name, ax in zip(drawn, axes):
@@ -259,7 +259,7 @@ def plot_response(result: Result, k: int, path: Path):
     rows = response_rows(result.system.coordinates)
     d, at, d_label, at_label, name = rows[k]
     d_scale, at_scale = family_scale(result, "d")[d], family_scale(result, "at")[at]
-    fig, axes = subplots(2, 1, figsize=(8, 4.5), sharex=True)
+    fig, axes = subplots(2, 1, figsize=(PRINT_WIDTH, 4.5), sharex=True)
     _line(axes[0], result, d, d_scale, d_label.split("[")[1].rstrip("]"), SHOWN_IN_MILLI, lw=0.8, color="C0")
     axes[0].set_ylabel(d_label)
     axes[0].set_title(f"Relative displacement and total acceleration: {name}")
@@ -278,7 +278,7 @@ def plot_point(result: Result, name: str, path: Path):
     axes_of = [c.axis for c in result.system.coordinates if not c.rotation]
     rows = ([(f"{name}_u{k}_m", f"u{k} [mm]", "C0") for k in axes_of]
             + [(f"{name}_at{k}_m_s2", f"at{k} [m/s²]", "C1") for k in axes_of])
-    fig, axes = subplots(len(rows), 1, figsize=(8, 1.75 * len(rows)), sharex=True)
+    fig, axes = subplots(len(rows), 1, figsize=(PRINT_WIDTH, 1.75 * len(rows)), sharex=True)
     tops = {kind: max(result.extremes.peak(c) for c, _, _ in rows if f"_{kind}" in c) for kind in ("u", "at")}
     for ax, (column, label, colour) in zip(axes, rows):
         _line(ax, result, column, tops["at" if "_at" in column else "u"], label.split("[")[1].rstrip("]"),
@@ -300,7 +300,7 @@ def plot_element_loops(result: Result, path: Path):
     n = len(system.elements)
     cols = min(n, 3)
     rows = math.ceil(n / cols)
-    fig, axes = subplots(rows, cols, figsize=(3.4 * cols, 3.0 * rows), squeeze=False)
+    fig, axes = subplots(rows, cols, figsize=(PRINT_WIDTH * cols / 3, 2.7 * rows), squeeze=False)
     first = np.cumsum([0] + [el.count for el in system.elements])[:-1]
     peak_f = [result.extremes.peak(f"e{k + 1}_f_N") for k in first]
     top = max(peak_f, default=0.0)
@@ -329,7 +329,7 @@ def plot_element_loops(result: Result, path: Path):
                 ax.axvline(x, color="C3", lw=0.9, ls="--", label=said if j == 0 else None)
             if not shown:  # (the legend's entry without a line in view)
                 ax.plot([], [], color="C3", lw=0.9, ls="--", label=said)
-            ax.legend(fontsize=6.5, loc="best", framealpha=0.9)
+            ax.legend(fontsize=8, loc="best", framealpha=0.9)
         ax.set_xlabel("u [mm]")
         ax.set_ylabel("f [kN]")
         # at most five labelled ticks a side: "-0.10 -0.05 0.00 0.05 0.10 0.15" runs together
@@ -362,7 +362,7 @@ def plot_energy(result: Result, path: Path):
     hysteretic energy nearly coincide where little is kinetic or viscous: the input is a broad
     light band under the others, the hysteretic energy a dashed line on it. Returns the figure
     (saved to ``path``)."""
-    fig, axes = subplots(2, 1, figsize=(8, 4.8), sharex=True, height_ratios=(3, 1))
+    fig, axes = subplots(2, 1, figsize=(PRINT_WIDTH, 4.8), sharex=True, height_ratios=(3, 1))
     _line(axes[0], result, "E_input_J", label="input", lw=3.5, color="C0", alpha=0.4, zorder=2,
           solid_capstyle="butt")
     _line(axes[0], result, "E_hysteretic_J", label="hysteretic\n(dissipated + stored)", lw=1.1, color="C1",

@@ -7,7 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from rbhyst.solve.located import CENTRE, GROUND, LocatedSpectra
-from rbhyst.report._style import NEGLIGIBLE, plain_log_ticks, plain_number, save, styled, subplots
+from rbhyst.report._style import NEGLIGIBLE, PRINT_WIDTH, plain_log_ticks, plain_number, save, styled, subplots
 
 G_STANDARD = 9.80665
 #: one line style per damping ratio, in the deck's order
@@ -53,8 +53,9 @@ def plot_spectra(spectra: LocatedSpectra, path: Path, title: str = ""):
     shaded. Returns the figure (saved to ``path``)."""
     s = spectra.spectrum
     directions, dropped = shown_directions(spectra)
-    width = max(5.2 * len(directions), 6.4 if dropped else 0.0)
-    fig, axes = subplots(1, len(directions), figsize=(width, 4.4), squeeze=False)
+    # one panel a row, as wide as a printed page: its texts print at their sizes
+    width = PRINT_WIDTH
+    fig, axes = subplots(len(directions), 1, figsize=(width, 0.9 + 3.4 * len(directions)), squeeze=False)
     colours = {loc: "k" if loc == GROUND else f"C{i}" for i, loc in
                enumerate(loc for loc in spectra.locations if loc != GROUND)}
     colours[GROUND] = "k"
@@ -92,7 +93,7 @@ def plot_spectra(spectra: LocatedSpectra, path: Path, title: str = ""):
         g_axis = ax.secondary_yaxis("right", functions=(lambda a: a / G_STANDARD, lambda a: a * G_STANDARD))
         g_axis.set_ylabel("sa [g]")
         plain_log_ticks(g_axis.yaxis)
-        ax.legend(fontsize=7, loc="best")
+        ax.legend(fontsize=8, loc="best")
     damping = ", ".join(f"{z:g}" for z in s.dampings)
     heading = "Response spectra (maximax absolute acceleration)" + (f": {title}" if title else "")
     lines = [heading, f"damping {damping}"]
