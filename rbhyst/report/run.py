@@ -298,9 +298,11 @@ def plot_element_loops(result: Result, path: Path):
     system = result.system
     sample = result.plot.sample
     n = len(system.elements)
-    cols = min(n, 3)
+    # the page's width in two columns up to four elements, three beyond (their rows must fit a page too)
+    cols = min(n, 2 if n <= 4 else 3)
     rows = math.ceil(n / cols)
-    fig, axes = subplots(rows, cols, figsize=(PRINT_WIDTH * cols / 3, 2.7 * rows), squeeze=False)
+    fig, axes = subplots(rows, cols, figsize=(PRINT_WIDTH * cols / (2 if n <= 4 else 3), (3.0 if n <= 4 else 2.6) * rows),
+                         squeeze=False)
     first = np.cumsum([0] + [el.count for el in system.elements])[:-1]
     peak_f = [result.extremes.peak(f"e{k + 1}_f_N") for k in first]
     top = max(peak_f, default=0.0)
