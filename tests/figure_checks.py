@@ -15,8 +15,10 @@ A4_WIDTH, A4_HEIGHT = 7.3, 235 / 25.4
 
 
 def drawn(fig):
-    """The figure laid out and drawn (its texts' places are known after a draw)."""
-    FigureCanvasAgg(fig).draw()
+    """The figure laid out and drawn (its texts' places are known after a draw); drawn again
+    only where something changed since."""
+    if not isinstance(fig.canvas, FigureCanvasAgg) or fig.stale:
+        FigureCanvasAgg(fig).draw()
     return fig
 
 
