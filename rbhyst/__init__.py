@@ -1,4 +1,4 @@
-"""rbhyst: nonlinear dynamics of 2D rigid bodies on Vaiana-Rosati hysteretic supports.
+"""rbhyst: nonlinear dynamics of rigid bodies, in the plane or in space, on Vaiana-Rosati hysteretic supports.
 
 The Python API (see README, "Python API"): ``load_deck``, ``run``, and the ``Result`` they give;
 ``modes``, the body's natural frequencies and mode shapes.

@@ -26,7 +26,7 @@ MODES_SECTIONS = ("body", "elements")
 
 def run(deck: Deck | str | Path, integrator: str | None = None, dt: float | None = None,
         out: str | Path | None = None, plots: bool | None = None, tolerance: float | None = None,
-        estimate: bool | None = None, keep: bool = True, monitor=None) -> Result:
+        estimate: bool | None = None, keep: bool = True, monitor=None, command: str | None = None) -> Result:
     """Run a deck (a Deck or a path) and return its Result, with its error estimated; each of
     its warnings (``Result.warnings``) is also issued through Python's ``warnings``, as an
     ``rbhyst.AccuracyWarning`` or an ``rbhyst.ModelWarning``.
@@ -40,25 +40,31 @@ def run(deck: Deck | str | Path, integrator: str | None = None, dt: float | None
     reductions (peaks, extremes, accuracy), as a sweep does. ``monitor``: an object with
     ``note(text)`` (what to say before the run starts, such as the size of a large CSV) and
     ``update(done, total, label)`` (how far it is), for a caller that shows them as it goes.
+    ``command``: the command line to record in summary.json's ``provenance`` (beside the time,
+    the version and the sha256 of the deck and of every file it names); None: the Python API.
     """
+    from rbhyst.files.provenance import provenance
+    from rbhyst.model.inputs import deck_inputs
     from rbhyst.results.analysis import analyse, deck_of, plan, scene
     from rbhyst.results.writers import deck_as_run
 
     d = deck_of(deck)
     system, settings = scene(d, integrator=integrator, dt=dt, tolerance=tolerance, estimate=estimate)
+    facts = provenance(command, deck_inputs(d))  # (after the scene, which says a missing record as its own)
     as_run = deck_as_run(d, integrator=integrator, dt=dt, tolerance=tolerance, estimate_error=estimate)
     progress = None if monitor is None else monitor.update
     if out is None:
         result = analyse(system, settings, keep=keep, progress=progress)
         result.writer = write
         result.deck = as_run
+        result.provenance = facts
         issue(result.warnings)
         return result
     from rbhyst.files.outdir import staged_directory
     from rbhyst.results.writers import CsvWriter
 
     planned = plan(system, settings)  # what can fail before a file is touched
-    early = planned.check_size(keep=False, folder=Path(out)) + replaced_results(Path(out), as_run)
+    early = planned.check_size(keep=False, folder=Path(out)) + replaced_results(Path(out), "run", as_run)
     for note in early if monitor is not None else ():
         monitor.note(note)
     draw = d.output.plots if plots is None else plots
@@ -68,6 +74,7 @@ def run(deck: Deck | str | Path, integrator: str | None = None, dt: float | None
             result = analyse(system, settings, keep=False, csv=csv, planned=planned, progress=progress)
             result.notes = early + result.notes
             result.deck = as_run
+            result.provenance = facts
             if progress is not None and draw:
                 progress(0, 0, "drawing the figures")
             # (while the last rows are written; the figures wait for them: a process with a thread
@@ -81,17 +88,28 @@ def run(deck: Deck | str | Path, integrator: str | None = None, dt: float | None
     return result
 
 
-def replaced_results(folder: Path, as_run: dict) -> list[str]:
-    """A note where ``folder`` holds the results of another deck, which the run replaces (the
+def replaced_results(folder: Path, command: str = "run", as_run: dict | None = None) -> list[str]:
+    """A note where ``folder`` holds results that ``rbhyst command`` will replace: another
+    command's (by the files its manifest lists), or, for ``run``, another deck's (the
     summary.json rbhyst wrote there, its deck's title other than this one's: a deck edited and
     run again replaces its own results, as it is meant to)."""
     import json
 
+    from rbhyst.files.outdir import results_of
+
+    folder = Path(folder)
+    before = results_of(folder)
+    if before is None:
+        return []
+    if before != command:
+        return [f"{folder}: replaces the results of rbhyst {before} that were there"]
+    if command != "run" or as_run is None:
+        return []
     try:
-        before = json.loads((folder / "summary.json").read_text())
+        summary = json.loads((folder / "summary.json").read_text())
     except (OSError, ValueError):
         return []
-    deck = before.get("deck") if isinstance(before, dict) else None
+    deck = summary.get("deck") if isinstance(summary, dict) else None
     if not isinstance(deck, dict) or deck.get("title") == as_run.get("title"):
         return []
     old = deck.get("title") or "(untitled)"

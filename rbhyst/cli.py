@@ -21,7 +21,7 @@ app = typer.Typer(
     no_args_is_help=True,
     pretty_exceptions_enable=False,
     rich_markup_mode=None,  # help texts hold units in brackets ("[s]"), not markup
-    help="Nonlinear dynamics of 2D rigid bodies on Vaiana-Rosati hysteretic supports.",
+    help="Nonlinear dynamics of rigid bodies, in the plane or in space, on Vaiana-Rosati hysteretic supports.",
 )
 
 EXIT_INPUT = 2  # the user's deck or data is wrong
@@ -46,6 +46,24 @@ def user_errors():
         raise typer.Exit(EXIT_ANALYSIS) from None
 
 
+def say_replaced(target: Path, command: str) -> None:
+    """A note before ``command`` writes into a folder holding another command's results, which
+    it replaces (rbhyst run says so itself, deck by deck)."""
+    from rbhyst.api import replaced_results
+
+    for note in replaced_results(Path(target), command):
+        say(f"note: {note}")
+
+
+def command_line(ctx: typer.Context) -> str:
+    """The command as run, quoted as a shell would need it to run it again (for the report)."""
+    import shlex
+
+    from rbhyst.terminal import ARGV
+
+    return shlex.join(["rbhyst", *ctx.meta.get(ARGV, [])])
+
+
 def _version(value: bool):
     if value:
         typer.echo(f"rbhyst {__version__}")
@@ -62,6 +80,7 @@ def _main(
 
 @app.command(cls=Command)
 def run(
+    ctx: typer.Context,
     deck: Annotated[Path, typer.Argument(help="TOML or YAML deck.")],
     out: Annotated[Optional[Path], typer.Option("--out", help="Output folder (default: the deck's).")] = None,
     integrator: Annotated[Optional[str], typer.Option(help="Override analysis.integrator.")] = None,
@@ -95,7 +114,7 @@ def run(
             with warnings.catch_warnings():  # (printed below as "warning: ..." lines: the API's are for Python)
                 warnings.simplefilter("ignore", RbhystWarning)
                 result = api.run(d, integrator=integrator, dt=dt, out=target, plots=plots and d.output.plots,
-                                 tolerance=tolerance, monitor=monitor)
+                                 tolerance=tolerance, monitor=monitor, command=command_line(ctx))
             if report:
                 from rbhyst.report.report_file import write_report
 
@@ -175,10 +194,15 @@ def run_line(result) -> str:
     e, s = result.extremes, result.settings
     g = ACCEL_UNITS["g"]
     coords = result.system.coordinates
-    at = ", ".join(f"|{c.key('at')}| = {e.peak(c.column('at')):.4g} m/s2 ({e.peak(c.column('at')) / g:.3g} g)"
+    rest = set(result.at_rest())  # (rounding, printed as 0)
+
+    def peak(column: str) -> float:
+        return 0.0 if column in rest else e.peak(column)
+
+    at = ", ".join(f"|{c.key('at')}| = {peak(c.column('at')):.4g} m/s2 ({peak(c.column('at')) / g:.3g} g)"
                    for c in coords if not c.rotation)
     method = s.integrator + (f" (rtol {s.rtol:g})" if s.integrator == "adaptive" else "")
-    motion = ", ".join(f"|{c.key('d')}| = {e.peak(c.column('d')):.4g} {c.d[1]}" for c in coords)
+    motion = ", ".join(f"|{c.key('d')}| = {peak(c.column('d')):.4g} {c.d[1]}" for c in coords)
     chosen = result.chosen
     steps = f"{result.steps} steps"
     if chosen is not None and s.integrator != "adaptive" and s.refine > 1:
@@ -233,6 +257,7 @@ def calibrate_plot(
                    "protocol": None if measured is not None else (d.loops.model_dump() if d.loops else "default"),
                    "sets": {r.name: r.summary() for r in results}}
         target = out if out is not None else deck.parent / "results" / f"{deck.stem}-loops"
+        say_replaced(target, "calibrate-plot")
         files = safe_names(names)
         with staged_directory(target) as tmp:
             for r in results:
@@ -314,6 +339,7 @@ def calibrate(
             "start_log": fit.starts,
         }
         target = out if out is not None else data.parent / "results" / f"{data.stem}-calibrate"
+        say_replaced(target, "calibrate")
         with staged_directory(target) as tmp:
             (tmp / "fitted.toml").write_text(fragment, encoding="utf-8")
             write_json(report, tmp / "fit.json")
@@ -410,6 +436,7 @@ def study(
 
             result = run_study(system, settings, names, dts, progress=progress)
         target = out if out is not None else _sibling_dir(d, deck, "-study")
+        say_replaced(target, "study")
         with staged_directory(target) as tmp:
             write_csv(result, tmp / "study.csv")
             write_json(result, tmp / "study.json")
@@ -475,6 +502,7 @@ def sweep(
     with user_errors():
         sw = load_sweep(sweep_file)
         target = out if out is not None else sw.default_out()
+        say_replaced(target, "sweep")
         if report:
             from rbhyst.report.report_file import check_report_target
 
@@ -628,6 +656,7 @@ def spectrum(
                                   periods=_split_list(periods, "--periods", float), direction=direction,
                                   free_vibration=free_vibration)
         target = out if out is not None else record.parent / "results" / f"{record.stem}-spectrum"
+        say_replaced(target, "spectrum")
         with staged_directory(target) as tmp:
             write_spectra_csv(spectra, tmp / "spectra.csv")
             if plots:
@@ -689,6 +718,7 @@ def transmissibility(
 
             result = stepped_sine(d, direction, amplitudes, freqs, workers=workers, progress=progress)
         target = out if out is not None else _sibling_dir(d, deck, "-transmissibility")
+        say_replaced(target, "transmissibility")
         with staged_directory(target) as tmp:
             write_csv(result, tmp / "transmissibility.csv")
             write_json(result, tmp / "transmissibility.json")
@@ -817,6 +847,7 @@ def make_motion(
                    "--z-over-h": z_over_h, "--level": level, "--axes": axes if axes != 2 else None,
                    "--duration": duration, "--dt": dt, "--seed": seed, "--table": table}
         mark = f"{MOTION_MARK} " + " ".join(f"{k} {shlex.quote(str(v))}" for k, v in options.items() if v is not None)
+        say_replaced(out, "make-motion")
         with staged_directory(out) as tmp:
             for m in made:
                 for axis in m.records:
@@ -855,6 +886,7 @@ MOTION_MARK = "# rbhyst make-motion"
 
 @app.command(cls=Command)
 def qualify(
+    ctx: typer.Context,
     deck: Annotated[Path, typer.Argument(help="TOML or YAML deck (x1 horizontal, x2 vertical; in space x1 and x2 "
                                               "horizontal, x3 vertical), with a qualify section or the options "
                                               "below.")],
@@ -905,13 +937,15 @@ def qualify(
                           "rrs_damping": rrs_damping, "motions": motions, "seed": seed, "duration": duration,
                           "motion_dt": motion_dt, "statistic": statistic, "table": table})
         target = out if out is not None else _sibling_dir(d, deck, "-qualify")
+        say_replaced(target, "qualify")
         check_free(target, output_files(req) + (["qualification.png"] if plots and d.output.plots else []))
         if report:
             from rbhyst.report.report_file import check_report_target
 
             check_report_target(target)
         with staged_directory(target) as tmp:
-            v = judge(d, req, tmp, integrator=integrator, dt=dt, tolerance=tolerance, say=say)
+            v = judge(d, req, tmp, integrator=integrator, dt=dt, tolerance=tolerance, say=say,
+                      command=command_line(ctx))
             if plots and d.output.plots:
                 from rbhyst.report.qualification import plot_verdict
 

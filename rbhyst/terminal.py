@@ -82,11 +82,16 @@ def _without(args: list[str], param) -> list[str] | None:
     return out
 
 
+#: where a command's context keeps its arguments as given (its name first)
+ARGV = "rbhyst.argv"
+
+
 class Command(TyperCommand):
     """A command whose usage mistakes are all reported at once: the library stops at the first,
     so the line is parsed again without each parameter found wrong, until none is."""
 
     def parse_args(self, ctx, args: list[str]) -> list[str]:
+        ctx.meta[ARGV] = [ctx.info_name, *args]  # the command as given, for the report to say
         problems: list[str] = []
         cmd, remaining = self, list(args)
         for _ in range(len(self.params) + 1):

@@ -77,9 +77,10 @@ def _same_numbers(a, b, path=""):
 
 
 def _strip_timing(summary: dict) -> dict:
-    """A summary without what differs by construction: the deck as written, the timings."""
+    """A summary without what differs by construction: the deck as written, the timings, and when,
+    by which command and from which files it ran."""
     s = copy.deepcopy(summary)
-    for k in ("timing", "deck"):
+    for k in ("timing", "deck", "provenance"):
         s.pop(k, None)
     return s
 

@@ -202,3 +202,21 @@ def test_another_deck_s_results_replaced_are_said(tmp_path):
     second["analysis"]["dt"] = 5e-4  # the same deck, edited: its own results, replaced as meant
     code, err = invoke("run", write_deck(tmp_path, second, "b"), "--out", out, "--no-plots")
     assert code == 0 and "replaces the results" not in err
+
+
+def test_another_command_s_results_replaced_are_said(tmp_path):
+    """A study into a run's folder replaces the run's files: said before it writes; the same
+    command again (its own results) and an empty folder say nothing."""
+    out = tmp_path / "o"
+    deck = write_deck(tmp_path, seed_deck(duration=0.05))
+    assert invoke("run", deck, "--out", out, "--no-plots")[0] == 0
+    study = ("study", deck, "--out", out, "--no-plots", "--integrators", "chang", "--dt", "0.005")
+    code, err = invoke(*study)
+    assert code == 0, err
+    assert f"note: {out}: replaces the results of rbhyst run that were there" in err
+    code, err = invoke(*study)
+    assert code == 0 and "replaces the results" not in err
+    code, err = invoke("run", deck, "--out", out, "--no-plots")
+    assert code == 0 and f"note: {out}: replaces the results of rbhyst study that were there" in err
+    code, err = invoke("run", deck, "--out", tmp_path / "fresh", "--no-plots")
+    assert code == 0 and "replaces the results" not in err

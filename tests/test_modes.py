@@ -306,6 +306,20 @@ def test_rbhyst_modes_prints_the_seed_decks_frequencies():
         assert [float(x) for x in row[2:]] == pytest.approx(expected["shapes"][j], abs=5e-4)
 
 
+def test_with_gravity_rbhyst_modes_says_which_table_to_use(tmp_path):
+    code, out, err = cli("modes", write_deck(tmp_path, hanging()))
+    assert code == 0, err
+    lines = out.splitlines()
+    rest = next(i for i, line in enumerate(lines) if line.startswith("modes at rest under gravity"))
+    which = next(i for i, line in enumerate(lines) if line.startswith("which to use:"))
+    assert lines[0].startswith("modes of the initial system") and which > rest + 4  # after the second table
+    assert "measured frequencies" in " ".join(lines[which:]) and "K0" in " ".join(lines[which:])
+    data = hanging()
+    del data["body"]["gravity"]
+    code, out, _ = cli("modes", write_deck(tmp_path, data, "plain"))
+    assert code == 0 and "which to use" not in out
+
+
 def test_rbhyst_modes_json_is_the_summarys_form(tmp_path):
     path = write_deck(tmp_path, hanging())
     code, out, err = cli("modes", path, "--json")

@@ -21,7 +21,7 @@ def _line(ax, label):
 # ---------------------------------------------------------------- loops.png
 
 
-def test_measured_loop_is_drawn_over_the_fit_as_markers(tmp_path):
+def test_measured_loop_is_drawn_over_the_fit_as_a_line_with_markers(tmp_path):
     from rbhyst.report.loops import plot_loops
 
     p = parameter_set({"kb": 2e5, "f0": 1e3, "alpha": 700.0}, {"kb": 2e5, "f0": 1e3, "alpha": 700.0})
@@ -32,7 +32,9 @@ def test_measured_loop_is_drawn_over_the_fit_as_markers(tmp_path):
     ax = fig.axes[0]
     data, fit = _line(ax, "test data"), _line(ax, "VRM fit")
     assert data.get_zorder() > fit.get_zorder()
-    assert data.get_marker() not in (None, "None", "", " ") and data.get_linestyle() in ("None", "", " ")
+    # markers on a thin line through every point: loops, not a cloud of 300 markers
+    assert data.get_marker() not in (None, "None", "", " ") and data.get_linestyle() not in ("None", "", " ")
+    assert data.get_linewidth() < fit.get_linewidth()
     assert data.get_color() != fit.get_color()
     assert (tmp_path / "loops.png").stat().st_size > 0
 
@@ -204,7 +206,8 @@ def test_stroke_limits_have_a_legend(tmp_path):
     res = rbhyst.run(write_deck(tmp_path, d))
     fig = plot_element_loops(res, tmp_path / "element_loops.png")
     first, second = fig.axes[:2]
-    assert [t.get_text() for t in first.get_legend().get_texts()] == ["stroke limits -10, +15 mm"]
+    # (0.2 s of the seed's record bends the element a fraction of a millimetre: the limits are off its axis)
+    assert [t.get_text() for t in first.get_legend().get_texts()] == ["stroke limits -10, +15 mm,\nbeyond the axis"]
     assert second.get_legend() is None  # no stroke, nothing to explain
 
 
@@ -267,7 +270,7 @@ def test_input_energy_shows_under_the_hysteretic(machine, tmp_path):
 
     fig = plot_energy(machine, tmp_path / "energy.png")
     ax = fig.axes[0]
-    given, hysteretic = _line(ax, "input"), _line(ax, "hysteretic (dissipated + stored)")
+    given, hysteretic = _line(ax, "input"), _line(ax, "hysteretic\n(dissipated + stored)")
     assert given.get_linewidth() >= 2.5 * hysteretic.get_linewidth()  # a band a dashed line runs in
     assert hysteretic.get_zorder() > given.get_zorder()
     assert hysteretic.get_linestyle() != given.get_linestyle()

@@ -5,6 +5,7 @@ to a folder without touching the run's files; rendered by a real browser where o
 from __future__ import annotations
 
 import base64
+import hashlib
 import json
 import re
 import shutil
@@ -101,6 +102,38 @@ def check_page(folder: Path) -> Page:
     return page
 
 
+#: a deck's [report]: what the page to sign says it is about
+FIELDS = {"project": "Substation 7 <upgrade>", "equipment": "Control cabinet CC-3", "engineer": "A. Engineer",
+          "reviewer": "R. Reviewer", "notes": "Checked against the catalogue & the test data."}
+STAMP = re.compile(r"\d{4}-\d\d-\d\d \d\d:\d\d:\d\d UTC")
+
+
+def about_section(folder: Path) -> str:
+    """The report's "About these results", as its text."""
+    text = (folder / "report.html").read_text()
+    section = text[text.index('<section class="about">'):]
+    return " ".join(Page(section[: section.index("</section>")]).text)
+
+
+def assert_signed(folder: Path, files: dict[str, Path], command: str) -> None:
+    """The page names each of ``files`` (key -> path) with the sha256 of its bytes, the command,
+    the version, two moments, the deck's [report] fields; a signature block; page numbers in print."""
+    from rbhyst import __version__
+
+    text = about_section(folder)
+    for key, path in files.items():
+        digest = hashlib.sha256(path.read_bytes()).hexdigest()
+        assert re.search(rf"{re.escape(key)} \S+ {path.stat().st_size} {digest}", text), (key, text)
+    assert f"rbhyst {__version__}" in text and command in text
+    assert len(STAMP.findall(text)) == 2  # results computed, report written
+    for value in FIELDS.values():
+        assert value in text
+    page = (folder / "report.html").read_text()
+    assert '<section class="signature">' in page and 'counter(page) " of " counter(pages)' in page
+    signature = " ".join(Page(page[page.index('<section class="signature">'):]).text)
+    assert "Prepared by A. Engineer" in signature and "Reviewed by R. Reviewer" in signature
+
+
 @pytest.fixture(scope="module")
 def run_folder(tmp_path_factory):
     """The seed deck, 3 s, with points, strokes, a damper, Rayleigh damping and spectra, run with --report."""
@@ -113,6 +146,7 @@ def run_folder(tmp_path_factory):
     d["dampers"] = [{"vertex": 6, "angle_deg": 0.0, "c": 500.0}]
     d["damping"] = {"rayleigh": {"ratio": 0.01, "modes": [1, 3]}}
     d["output"] = {"points": [{"name": "top", "point": [-0.1286, 1.0571]}], "spectra": {"damping": 0.05}}
+    d["report"] = FIELDS
     deck = folder / "deck.toml"
     deck.write_text(tomli_w.dumps(d))
     code, err = invoke("run", deck, "--out", folder / "out", "--integrator", "central-difference", "--report")
@@ -210,13 +244,74 @@ def test_a_sweep_report_holds_its_statistics_and_fragility(sweep_folder):
     assert "fragility.png" in {i["data-file"] for i in page.images}
 
 
+def test_a_run_report_says_when_by_which_rbhyst_and_command_and_from_which_files(run_folder):
+    out, _ = run_folder
+    folder = out.parent
+    records = folder / "records"
+    assert_signed(out, {"deck": folder / "deck.toml", "excitation.support.x1.file": records / "synthetic_x1.csv",
+                        "excitation.support.x2.file": records / "synthetic_x2.csv"},
+                  f"rbhyst run {folder / 'deck.toml'} --out {out} --integrator central-difference --report")
+
+
+def test_a_report_without_provenance_says_its_files_cannot_be_checked(run_folder, tmp_path):
+    folder = tmp_path / "o"
+    shutil.copytree(run_folder[0], folder)
+    s = json.loads((folder / "summary.json").read_text())
+    del s["provenance"]  # as an older rbhyst wrote it
+    (folder / "summary.json").write_text(json.dumps(s))
+    assert invoke("report", folder)[0] == 0
+    assert "summary.json says nothing of the files it was made from" in about_section(folder)
+
+
+def test_an_unknown_report_field_is_one_line_naming_it(tmp_path):
+    d = tomllib.loads((DECKS / "seed_wri.toml").read_text())
+    d["report"] = {"project": "p", "enginer": "A. Engineer"}
+    deck = tmp_path / "deck.toml"
+    deck.write_text(tomli_w.dumps(d))
+    code, err = invoke("run", deck, "--out", tmp_path / "o")
+    assert code == 2 and err.strip() == "error: report.enginer: unknown key"
+
+
 @pytest.fixture(scope="module")
 def qualification_folder(tmp_path_factory):
     """The sample cabinet qualified to AC156 on two motions, with --report."""
-    folder = tmp_path_factory.mktemp("qualification_report") / "q"
-    code, err = invoke("qualify", DECKS / "cabinet_qualify.toml", "--out", folder, "--motions", "2", "--report")
+    folder = tmp_path_factory.mktemp("qualification_report")
+    d = tomllib.loads((DECKS / "cabinet_qualify.toml").read_text())
+    d["report"] = FIELDS
+    deck = folder / "cabinet.toml"
+    deck.write_text(tomli_w.dumps(d))
+    code, err = invoke("qualify", deck, "--out", folder / "q", "--motions", "2", "--report")
     assert code == 0, err
-    return folder
+    return folder / "q"
+
+
+def test_a_qualification_report_is_signed_for_its_deck(qualification_folder):
+    deck = qualification_folder.parent / "cabinet.toml"
+    assert_signed(qualification_folder, {"deck": deck},
+                  f"rbhyst qualify {deck} --out {qualification_folder} --motions 2 --report")
+
+
+def test_a_qualification_on_the_deck_s_records_to_rrs_files_gives_each_file_s_sha256(tmp_path):
+    """The deck's own motion and RRS files of its own: the deck, both records and both RRS
+    files, each with its checksum (the verdict is beside the point: 2 s of record)."""
+    shutil.copytree(DECKS / "records", tmp_path / "records")
+    for axis, scale in (("x1", 1.0), ("x2", 0.5)):
+        (tmp_path / f"rrs_{axis}.csv").write_text("frequency_hz,sa_g\n" + "".join(
+            f"{f},{scale * a}\n" for f, a in ((1.0, 0.2), (2.0, 0.8), (10.0, 0.8), (33.0, 0.3))))
+    d = tomllib.loads((DECKS / "cabinet_qualify.toml").read_text())
+    d["analysis"]["duration"] = 2.0
+    d["report"] = FIELDS
+    d["qualify"] = {"rrs": "rrs_x1.csv", "rrs_x2": "rrs_x2.csv", "rrs_damping": 0.05, "motions": "deck",
+                    "acceleration_limit_g": d["qualify"]["acceleration_limit_g"]}
+    deck = tmp_path / "deck.toml"
+    deck.write_text(tomli_w.dumps(d))
+    out = tmp_path / "q"
+    code, err = invoke("qualify", deck, "--out", out, "--report")
+    assert code in (0, 1), err
+    assert_signed(out, {"deck": deck, "qualify.rrs": tmp_path / "rrs_x1.csv", "qualify.rrs_x2": tmp_path / "rrs_x2.csv",
+                        "excitation.support.x1.file": tmp_path / "records" / "synthetic_x1.csv",
+                        "excitation.support.x2.file": tmp_path / "records" / "synthetic_x2.csv"},
+                  f"rbhyst qualify {deck} --out {out} --report")
 
 
 def test_a_qualification_report_holds_its_verdict_criteria_spectra_and_runs(qualification_folder):
@@ -322,3 +417,24 @@ def test_a_browser_renders_it(which, run_folder, sweep_folder, qualification_fol
                    capture_output=True)
     pages = len(re.findall(rb"/Type\s*/Page[^s]", pdf.read_bytes()))
     assert pages >= 3
+
+
+def test_a_standard_s_spectrum_is_printed_to_the_digits_it_carries(qualification_folder, tmp_path):
+    """IEEE 693's plateau is 2.5 beta ZPA with beta(5 %) = (3.21 - 0.68 ln 5) / 2.1156 = 0.99999:
+    its constants carry no five digits, so the page says 1.25 g and 1 g, not 1.2499 g nor 0.99999 g."""
+    from rbhyst.analyses.qualification.rrs import ieee693
+
+    folder = tmp_path / "q"
+    shutil.copytree(qualification_folder, folder)
+    q = json.loads((folder / "qualification.json").read_text())
+    q["standard"] = "ieee693"
+    q["rrs"] = {axis: r.describe() for axis, r in ieee693("moderate", None).items()}
+    plateau = {axis: q["rrs"][axis]["breakpoints_sa_g"][1] for axis in ("x1", "x2")}  # at 1.1 Hz
+    assert 0.99999 < plateau["x2"] < 1.0 and 1.24998 < plateau["x1"] < 1.25
+    (folder / "qualification.json").write_text(json.dumps(q, indent=2) + "\n")
+    assert invoke("report", folder)[0] == 0
+    page = check_page(folder)
+    shown = {a["data-src"]: v.strip() for a, v in page.numbers}
+    assert shown["qualification.json:rrs.x1.breakpoints_sa_g.1"] == "1.25"
+    assert shown["qualification.json:rrs.x2.breakpoints_sa_g.1"] == "1"
+    assert not re.search(r"0\.9999|1\.2499", " ".join(page.text))

@@ -193,6 +193,24 @@ def read_manifest(folder: Path) -> Manifest:
     return Manifest({x for x in files if _inside(x)}, {x for x in folders if _inside(x)})
 
 
+#: the command whose results a folder holds, by the files only it writes there (first match)
+RESULTS_OF = (("qualify", {"qualification.json"}), ("sweep", {"sweep.json"}),
+              ("run", {"summary.json", "time_history.csv"}), ("calibrate", {"fitted.toml"}),
+              ("calibrate-plot", {"summary.json"}), ("study", {"study.json"}),
+              ("transmissibility", {"transmissibility.json"}), ("make-motion", {"motions.json", "trs.csv"}),
+              ("spectrum", {"spectra.csv"}))
+
+
+def results_of(folder: Path) -> str | None:
+    """The rbhyst command whose results ``folder``'s manifest lists (None: none, or no manifest
+    this rbhyst reads: the command then refuses the folder on its own)."""
+    try:
+        owned = read_manifest(folder).files
+    except InputError:
+        return None
+    return next((command for command, files in RESULTS_OF if files <= owned), None)
+
+
 def _inside(rel: str) -> bool:
     p = PurePosixPath(rel)
     return (bool(p.parts) and not p.is_absolute() and ".." not in p.parts and "\\" not in rel

@@ -729,6 +729,16 @@ class Qualify(_Model):
         return self
 
 
+class ReportFields(_Model):
+    """What report.html prints above its results for the page to be signed (all optional)."""
+
+    project: str | None = None
+    equipment: str | None = None
+    engineer: str | None = None
+    reviewer: str | None = None
+    notes: str | None = None
+
+
 class Deck(_Model):
     title: str | None = None
     body: Body | None = None
@@ -744,6 +754,8 @@ class Deck(_Model):
     output: Output = Output()
     loops: Loops | None = None
     qualify: Qualify | None = None
+    #: who and what the report is for: printed on report.html, never read by the analysis
+    report: ReportFields | None = None
     #: the file the deck came from (None for one built in code): relative paths resolve beside it
     _source: Path | None = PrivateAttr(default=None)
 

@@ -34,6 +34,12 @@ STYLE = {
 #: response, 1e-15 m/s2 under a pulse of 100 m/s2)
 NEGLIGIBLE = 1e-9
 
+#: the width of A4 less the report's margins, inches: a figure this wide prints at its own size,
+#: its texts at their sizes (9 pt ticks, 8 pt legends: legible); a wider one is shrunk to it
+PRINT_WIDTH = 7.3
+#: the height a figure may print at (report.html's print style: 235 mm), inches
+PRINT_HEIGHT = 235 / 25.4
+
 #: margins of a figure of stacked time series, in inches: left, right, bottom, top, and the gap
 #: between axes (room for a power of ten above each)
 TIME_MARGINS = (0.8, 0.2, 0.45, 0.35, 0.3)

@@ -17,7 +17,9 @@ def element_table(summary: dict, all_up_to: int = ALL_UP_TO, shown: int = SHOWN)
     entries = summary.get("elements") or []
     if not entries:
         return []
-    peaks, extremes = summary["peaks"], summary["extremes"]
+    rest = set(summary.get("at_rest", ()))  # (rounding: shown as 0)
+    peaks = {c: 0.0 if c in rest else v for c, v in summary["peaks"].items()}
+    extremes = {c: {**v, "max": 0.0, "min": 0.0} if c in rest else v for c, v in summary["extremes"].items()}
     rows, k = [], 1
     for el in entries:
         n = el["count"]
@@ -30,7 +32,8 @@ def element_table(summary: dict, all_up_to: int = ALL_UP_TO, shown: int = SHOWN)
             "angle": el.get("angle_deg"),
             "direction": el.get("direction"),
             "f": peaks[f"e{k}_f_N"],
-            "u": stroke["peak_deformation_m"] if stroke else (u["max"] if abs(u["max"]) >= abs(u["min"]) else u["min"]),
+            "u": 0.0 if f"e{k}_u_m" in rest else stroke["peak_deformation_m"] if stroke else (
+                u["max"] if abs(u["max"]) >= abs(u["min"]) else u["min"]),
             "limits": stroke["limits_m"] if stroke else None,
             "used": stroke["utilization"] if stroke else None,
         })
@@ -57,7 +60,7 @@ def element_table(summary: dict, all_up_to: int = ALL_UP_TO, shown: int = SHOWN)
         line = ("(" + ", ".join(f"{d + 0.0:.3g}" for d in r["direction"]) + ")") if space else f"{r['angle']:g}"
         cells = [r["label"], *([r["isolator"]] if isolators else []), r["set"], line,
                  f"{r['f'] * (1e-3 if kn else 1.0):.4g}",
-                 f"{r['u'] * 1e3:+.4g}"]
+                 f"{r['u'] * 1e3:+.4g}" if r["u"] else "0"]
         if strokes:
             if r["limits"] is None:
                 cells += ["-", "-"]
@@ -112,4 +115,12 @@ def mode_table(modes: dict) -> list[str]:
         for row in table:
             lines.append("  " + "  ".join(c.rjust(w) for c, w in zip(row, widths)).rstrip())
         lines.extend(f"  {note}" for note in part.get("notes", ()))
+    if modes.get("at_rest"):
+        lines.extend(WHICH_MODES)
     return lines
+
+
+#: after the two tables of a body under gravity: what each is for
+WHICH_MODES = ("which to use: the modes at rest are those of the body as installed, its elements loaded by its weight",
+               "  (their loading tangents): compare them with the equipment's measured frequencies on its mounts;",
+               "  the initial ones (K0, independent of the load) are those Rayleigh damping and the integrators take.")

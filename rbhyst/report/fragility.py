@@ -13,7 +13,10 @@ MAX_GROUPS = 8  # vary combinations drawn per panel
 
 
 @styled
-def plot_fragility(curves, label: str, vary_keys: list[str], path: Path, confidence: float = 0.9) -> None:
+def plot_fragility(curves, label: str, vary_keys: list[str], path: Path, confidence: float = 0.9):
+    """A panel per limit state: each vary combination's curve and band, the share of cases reaching
+    the limit at each intensity with its count (3/7), or why no curve was fitted. Returns the
+    figure (saved to ``path``)."""
     by_state: dict[str, list] = {}
     for c in curves:
         by_state.setdefault(c.limit_state.name, []).append(c)
@@ -43,12 +46,13 @@ def plot_fragility(curves, label: str, vary_keys: list[str], path: Path, confide
                         label=f"{group}: {text}" if several else f"fit: {text}")
             else:
                 refused.append(f"{group + ': ' if group else ''}not fitted: {c.message}")
-            ax.plot(c.x[keep], c.z[keep] / c.n[keep], "o", ms=5, mfc="white", mec=colour, mew=1.4,
-                    label=None if several else "share of cases reaching it")
-            if not several:
-                for x, z, m in zip(c.x[keep], c.z[keep], c.n[keep]):
-                    ax.annotate(f"{z}/{m}", (x, z / m), textcoords="offset points", xytext=(0, 6), ha="center",
-                                fontsize=6, color="0.35")
+            # a combination without a curve names its markers in the legend itself
+            marks = ("share of cases reaching it" if not several else None if c.fitted else
+                     f"{group}: share reaching it (not fitted)")
+            ax.plot(c.x[keep], c.z[keep] / c.n[keep], "o", ms=5, mfc="white", mec=colour, mew=1.4, label=marks)
+            for x, z, m in zip(c.x[keep], c.z[keep], c.n[keep]):  # each stripe's count: 3/7
+                ax.annotate(f"{z}/{m}", (x, z / m), textcoords="offset points", xytext=(0, 5 + 9 * g), ha="center",
+                            va="bottom", fontsize=7, color=colour if several else "0.35")
         if refused:
             ax.text(0.02, 0.97, "\n".join(_wrap(t, 52) for t in refused), transform=ax.transAxes, va="top",
                     fontsize=6.5, color="C3", bbox={"fc": "white", "ec": "C3", "alpha": 0.85, "lw": 0.6})
@@ -58,9 +62,12 @@ def plot_fragility(curves, label: str, vary_keys: list[str], path: Path, confide
         ax.set_ylabel("P(reach)")
         ax.set_title(f"{name}: {ls.quantity} >= {ls.limit:g}", fontsize=9)
         if ax.get_legend_handles_labels()[0]:
-            ax.legend(fontsize=6.5, loc="lower right" if any(c.fitted for c in members) else "center right")
+            # (a curve rising to the right leaves the middle of the right side free; the lower right
+            # holds the high intensities' shares of an unfitted combination)
+            ax.legend(fontsize=6.5, loc="center right")
     fig.suptitle("Fragility: maximum likelihood on the stripes, bootstrap band")
     save(fig, path)
+    return fig
 
 
 def _wrap(text: str, width: int) -> str:

@@ -14,11 +14,13 @@ import base64
 import csv
 import html
 import json
+from datetime import UTC, datetime
 from pathlib import Path
 
 from rbhyst._version import __version__
 from rbhyst.errors import InputError
 from rbhyst.model.deck import ACCEL_UNITS
+from rbhyst.report.signing import CSS as SIGNING_CSS, about, page_css, signature
 
 G = ACCEL_UNITS["g"]  # m/s2 (a g column beside m/s2 only; every value in m/s2 is summary.json's)
 
@@ -90,9 +92,17 @@ def esc(x) -> str:
 
 
 def fmt(v: float, kind: str = "g") -> str:
-    """How a number reads: 5 significant digits (g), or a percentage (pct)."""
+    """How a number reads: 5 significant digits (g), 4 (g4: a required response spectrum, whose
+    standards' constants carry no more), a percentage (pct), or 0 for a column the run leaves at
+    rest, to rounding (rest)."""
     if kind == "pct":
         return f"{100 * v:.3g} %"
+    if kind == "g4":  # a value that carries four digits at most (a standard's spectrum: 1.25 g, not 1.2499 g)
+        return f"{v:.4g}"
+    if kind == "rest":  # at rest to rounding (summary.json at_rest): no response to show
+        return "0"
+    if kind == "restpct":  # ... and its error, rounding too
+        return "0 %"
     return f"{v:.5g}"
 
 
@@ -129,12 +139,14 @@ def items(lines: list[str], cls: str) -> str:
     return f'<ul class="{cls}">' + "".join(f"<li>{esc(x)}</li>" for x in lines) + "</ul>"
 
 
-def page(title: str, subtitle: str, body: list[str]) -> str:
+def page(title: str, subtitle: str, body: list[str], top: str = "", end: str = "") -> str:
+    """The whole page: ``top`` under the title (what it is about), ``body``, then ``end`` (the
+    signatures) before the footer; in print, each page numbered in its foot."""
     return ("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
             "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">"
-            f"<title>{esc(title)}</title><style>{CSS}</style></head><body>"
+            f"<title>{esc(title)}</title><style>{CSS}{SIGNING_CSS}{page_css(title)}</style></head><body>"
             f"<header><h1>{esc(title)}</h1><p class=\"sub\">{esc(subtitle)}</p></header>"
-            + "\n".join(body)
+            + top + "\n".join(body) + end
             + f"<footer>Written by rbhyst {esc(__version__)} from the files of this folder, as listed in "
               ".rbhyst.json: every number names the file it is read from, every figure is one of its PNGs.</footer>"
               "</body></html>\n")
@@ -229,7 +241,9 @@ def figure_names(folder: Path, owned: set[str], order: tuple[str, ...]) -> list[
 # ---------------------------------------------------------------- a run
 
 
-def run_report(folder: Path, owned: set[str]) -> str:
+def run_report(folder: Path, owned: set[str], written: datetime | None = None) -> str:
+    """A run's page from its summary.json and PNGs (``written``: the moment to say it was
+    written, default now)."""
     s = load_json(folder / "summary.json")
     src = "summary.json"
     peaks, ext = s.get("peaks", {}), s.get("extremes", {})
@@ -246,10 +260,11 @@ def run_report(folder: Path, owned: set[str]) -> str:
     cells.append(f"<div><b>integrator</b>{esc(an.get('integrator', ''))}</div>")
     glance("dt", an.get("dt_s"), "analysis.dt_s", unit="s")
     glance("duration", an.get("duration_s"), "analysis.duration_s", unit="s")
+    rest = set(s.get("at_rest", ()))
     for c in ("u1_m", "u2_m", "u3_m", "theta1_rad", "theta2_rad", "theta3_rad", "at1_m_s2", "at2_m_s2", "at3_m_s2"):
         if c in peaks:
             name, unit = _unit(c)
-            glance(f"peak |{name}|", peaks[c], f"peaks.{c}", unit=unit)
+            glance(f"peak |{name}|", peaks[c], f"peaks.{c}", "rest" if c in rest else "g", unit)
     if acc and acc.get("estimated_error"):
         worst = max(acc["estimated_error"], key=acc["estimated_error"].get)
         glance(f"largest estimated error ({worst})", acc["estimated_error"][worst],
@@ -262,7 +277,7 @@ def run_report(folder: Path, owned: set[str]) -> str:
                                       '<p class="ok">No warnings.</p>'))
     if notes:
         body.append("<h3>Notes</h3>" + items(notes, "notes"))
-    body.append(_accuracy(acc, en))
+    body.append(_accuracy(acc, en, {_unit(c)[0] for c in s.get("at_rest", ())}))
     body.append(_model(folder, owned, s))
     body.append(peaks_section(s))
     figures = [n for n in figure_names(folder, owned, RUN_FIGURES) if n != "model.png"]
@@ -277,11 +292,14 @@ def run_report(folder: Path, owned: set[str]) -> str:
                    '<p class="muted">summary.json holds no deck (written by an older rbhyst).</p>')
                 + "</section>")
     title = s.get("title") or "rbhyst run"
+    fields = (deck or {}).get("report")
     return page(title, f"Time-history analysis, rbhyst {s.get('rbhyst_version', '')}: results in {folder.name}/",
-                body)
+                body, about(s.get("provenance"), fields, written or datetime.now(UTC), "summary.json"),
+                signature(fields))
 
 
-def _accuracy(acc: dict | None, en: dict) -> str:
+def _accuracy(acc: dict | None, en: dict, rest: set[str] = frozenset()) -> str:
+    """The accuracy statement; ``rest``: the outputs at rest (their error, rounding too, reads 0 %)."""
     src = "summary.json"
     out = ["<h2>Accuracy</h2>"]
     if not acc:
@@ -301,7 +319,8 @@ def _accuracy(acc: dict | None, en: dict) -> str:
             out.append(f"<p>Tolerance asked for: {num(acc['tolerance'], f'{src}:accuracy.tolerance', 'g', 'span')}"
                        "</p>")
         # three outputs a row: a scene's 30-odd outputs fit on the page
-        cells = [[k, num(v, f"{src}:accuracy.estimated_error.{k}", "pct")] for k, v in est.items()]
+        cells = [[k, num(v, f"{src}:accuracy.estimated_error.{k}", "restpct" if k in rest else "pct")]
+                 for k, v in est.items()]
         per = 3
         rows = [sum(cells[r::-(-len(cells) // per)][:per], []) for r in range(-(-len(cells) // per))]
         rows = [r + ["", '<td class="num"></td>'] * ((2 * per - len(r)) // 2) for r in rows]
@@ -399,22 +418,39 @@ def _place_heads(space: bool) -> list[str]:
 
 def _extreme_rows(s: dict, columns: list[str], g_column: bool, src: str = "summary.json") -> list[list[str]]:
     rows = []
+    rest = set(s.get("at_rest", ()))
     for c in columns:
         e = s["extremes"][c]
         name, unit = _unit(c)
-        row = [f"{name} [{unit}]" if unit else name, num(s["peaks"][c], f"{src}:peaks.{c}")]
+        kind = "rest" if c in rest else "g"
+        row = [f"{name} [{unit}]" if unit else name, num(s["peaks"][c], f"{src}:peaks.{c}", kind)]
         if g_column:
-            row.append(f'<td class="num">{esc(fmt(s["peaks"][c] / G))}</td>' if unit == "m/s2" else
+            row.append(f'<td class="num">{esc(fmt(s["peaks"][c] / G, kind))}</td>' if unit == "m/s2" else
                        '<td class="num muted">-</td>')
-        row += [num(e["max"], f"{src}:extremes.{c}.max"), num(e["time_of_max_s"], f"{src}:extremes.{c}.time_of_max_s"),
-                num(e["min"], f"{src}:extremes.{c}.min"), num(e["time_of_min_s"], f"{src}:extremes.{c}.time_of_min_s")]
+        if c in rest:  # (a time of a peak of rounding means nothing)
+            row += [num(e["max"], f"{src}:extremes.{c}.max", kind), num(None, ""),
+                    num(e["min"], f"{src}:extremes.{c}.min", kind), num(None, "")]
+        else:
+            row += [num(e["max"], f"{src}:extremes.{c}.max"), num(e["time_of_max_s"], f"{src}:extremes.{c}.time_of_max_s"),
+                    num(e["min"], f"{src}:extremes.{c}.min"), num(e["time_of_min_s"], f"{src}:extremes.{c}.time_of_min_s")]
         rows.append(row)
     return rows
+
+
+def _peak(s: dict, column: str, src: str) -> str:
+    """A peak's cell: 0 where the run leaves the column at rest (summary.json at_rest)."""
+    return num(s["peaks"].get(column), f"{src}:peaks.{column}", "rest" if column in s.get("at_rest", ()) else "g")
+
+
+#: said under a table where a 0 stands for rounding
+AT_REST_NOTE = ('<p class="muted">0: at rest, to rounding (its peak below 1e-9 of the largest of its kind, as '
+                "summary.json's at_rest lists it; the files keep the value).</p>")
 
 
 def peaks_section(s: dict, src: str = "summary.json", title: str = "Peaks and extremes") -> str:
     """The peaks and extremes of a run's summary.json (``src``: its path in the folder)."""
     peaks = s.get("peaks", {})
+    rest = set(s.get("at_rest", ()))
     head = ["", "peak |x|", "peak [g]", "max", "at t [s]", "min", "at t [s]"]
     out = [f'<section class="page"><h2>{esc(title)}</h2>',
            "<p>Over every step of dt (whatever output.every keeps). Accelerations are total (what an "
@@ -430,12 +466,14 @@ def peaks_section(s: dict, src: str = "summary.json", title: str = "Peaks and ex
         for _ in range(e["count"]):
             f, u = f"e{k}_f_N", f"e{k}_u_m"
             st = e.get("stroke")
-            rows.append([f"e{k}{_isolator(e)}", e["hysteresis"], num(peaks.get(f), f"{src}:peaks.{f}"),
-                         num(peaks.get(u), f"{src}:peaks.{u}"),
-                         num(s["extremes"][u]["max"], f"{src}:extremes.{u}.max"),
-                         num(s["extremes"][u]["min"], f"{src}:extremes.{u}.min"),
-                         num(st["utilization"], f"{src}:elements.{i}.stroke.utilization", "pct") if st else num(None, ""),
-                         num(st["time_of_peak_s"], f"{src}:elements.{i}.stroke.time_of_peak_s") if st else num(None, "")])
+            ku = "rest" if u in rest else "g"
+            rows.append([f"e{k}{_isolator(e)}", e["hysteresis"], _peak(s, f, src), _peak(s, u, src),
+                         num(s["extremes"][u]["max"], f"{src}:extremes.{u}.max", ku),
+                         num(s["extremes"][u]["min"], f"{src}:extremes.{u}.min", ku),
+                         num(st["utilization"], f"{src}:elements.{i}.stroke.utilization", "pct" if ku == "g" else ku)
+                         if st else num(None, ""),
+                         num(st["time_of_peak_s"], f"{src}:elements.{i}.stroke.time_of_peak_s") if st and ku == "g"
+                         else num(None, "")])
             k += 1
     out.append("<h3>Elements</h3>" + table(["element", "set", "peak |force| [N]", "peak |deformation| [m]",
                                             "max deformation [m]", "min deformation [m]", "stroke used",
@@ -451,9 +489,9 @@ def peaks_section(s: dict, src: str = "summary.json", title: str = "Peaks and ex
         for n in names:
             row = [n]
             for c in (f"{n}_at{k}_m_s2" for k in axes):
-                row += [num(peaks.get(c), f"{src}:peaks.{c}"),
-                        f'<td class="num">{esc(fmt(peaks[c] / G))}</td>' if c in peaks else num(None, "")]
-            row += [num(peaks.get(f"{n}_u{k}_m"), f"{src}:peaks.{n}_u{k}_m") for k in axes]
+                row += [_peak(s, c, src), f'<td class="num">{esc(fmt(peaks[c] / G, "rest" if c in rest else "g"))}'
+                        "</td>" if c in peaks else num(None, "")]
+            row += [_peak(s, f"{n}_u{k}_m", src) for k in axes]
             rows.append(row)
         head = ["point", *[h for k in axes for h in (f"peak |at{k}| [m/s2]", "[g]")],
                 *[f"peak |u{k}| [m]" for k in axes]]
@@ -465,6 +503,8 @@ def peaks_section(s: dict, src: str = "summary.json", title: str = "Peaks and ex
                  num(peaks.get(c.replace("_f_N", "_v_m_s")), f"{src}:peaks.{c.replace('_f_N', '_v_m_s')}")]
                 for c in dampers]
         out.append("<h3>Dampers</h3>" + table(["damper", "peak |force| [N]", "peak |rate| [m/s]"], rows, {1, 2}))
+    if rest:
+        out.append(AT_REST_NOTE)
     en = s.get("energy", {})
     rows = [[label, num(en.get(key), f"{src}:energy.{key}")] for label, key in
             (("input [J]", "input_J"), ("hysteretic [J]", "hysteretic_J"), ("viscous [J]", "viscous_J")) if key in en]

@@ -57,7 +57,9 @@ def plot_loops(results: list[LoopResult], path: Path, title: str | None = None,
             # point): where they agree the markers sit on the band, where they differ both show
             ax.plot(res.u * u_fac, res.f * f_fac, color="C0", lw=2.4, alpha=0.7, zorder=3,
                     label="VRM fit" if initial is not None else "VRM")
-            ax.plot(res.u * u_fac, res.f_data * f_fac, color="0.1", ls="none", marker="o", ms=2.8, mfc="none",
+            # the measurement a thin line through every point, in the order measured (its loops
+            # read as loops, not a cloud), open markers on every n-th
+            ax.plot(res.u * u_fac, res.f_data * f_fac, color="0.1", lw=0.6, marker="o", ms=2.8, mfc="none",
                     mew=0.6, markevery=max(1, len(res.u) // DATA_MARKERS), zorder=4, label="test data")
         lo, hi = f_all.min(), f_all.max()
         pad = 0.08 * (hi - lo if hi > lo else 1.0)

@@ -9,10 +9,12 @@ run. Every number is qualification.json's or a run's summary.json's, as the file
 
 from __future__ import annotations
 
+from datetime import UTC, datetime
 from pathlib import Path
 
 from rbhyst.report.html import (esc, figure, figure_names, items, load_json, num, page, peaks_section, table,
                                 toml_text)
+from rbhyst.report.signing import about, signature
 
 SRC = "qualification.json"
 STANDARDS = {"ac156": "ICC-ES AC156", "ieee693": "IEEE 693"}
@@ -20,7 +22,9 @@ STANDARDS = {"ac156": "ICC-ES AC156", "ieee693": "IEEE 693"}
 RRS_POINTS_SHOWN = 16
 
 
-def qualification_report(folder: Path, owned: set[str]) -> str:
+def qualification_report(folder: Path, owned: set[str], written: datetime | None = None) -> str:
+    """A qualification's page from qualification.json, its runs' summary.json and its figure
+    (``written``: the moment to say it was written, default now)."""
     q = load_json(folder / SRC)
     runs = [(r["motion"], r["summary"], load_json(folder / r["summary"])) for r in q.get("runs", [])
             if r["summary"] in owned and (folder / r["summary"]).is_file()]
@@ -45,8 +49,10 @@ def qualification_report(folder: Path, owned: set[str]) -> str:
         body.append(peaks_section(s, src, f"{label}: peaks and extremes ({src})"))
     body.append(_deck(q))
     title = next((s.get("title") for _, _, s in runs if s.get("title")), None) or "rbhyst qualify"
+    fields = (q.get("deck_as_run") or {}).get("report")
     return page(title, f"Qualification to {standard}, rbhyst {q.get('rbhyst_version', '')}: results in "
-                       f"{folder.name}/", body)
+                       f"{folder.name}/", body,
+                about(q.get("provenance"), fields, written or datetime.now(UTC), SRC), signature(fields))
 
 
 def _caption(name: str) -> str:
@@ -150,7 +156,7 @@ def _spectra(q: dict) -> str:
                 ["damping ratio", num(r.get("damping"), f"{p}.damping", "pct")],
                 ["band, times the RRS", f"{r['band'][0]:g} to {r['band'][1]:g}"],
                 ["check range [Hz]", f"{r['check_range_hz'][0]:g} to {r['check_range_hz'][1]:g}"],
-                ["least peak acceleration [g]", num(r.get("peak_min_g"), f"{p}.peak_min_g")]]
+                ["least peak acceleration [g]", num(r.get("peak_min_g"), f"{p}.peak_min_g", "g4")]]
         out.append(f"<h3>{esc(axis)}: {esc(r.get('name', ''))}</h3>" + table(["", ""], rows))
         freq, sa, key = r.get("frequency_hz", []), r.get("sa_g", []), ("frequency_hz", "sa_g")
         if r.get("formula"):  # a standard's formulas: them, and their breakpoints (the curve is tabulated)
@@ -159,7 +165,7 @@ def _spectra(q: dict) -> str:
                                                                                          "breakpoints_sa_g")
         if 0 < len(freq) <= RRS_POINTS_SHOWN:
             out.append(table(["RRS point", "frequency [Hz]", "spectral acceleration [g]"],
-                             [[str(k + 1), num(f, f"{p}.{key[0]}.{k}"), num(a, f"{p}.{key[1]}.{k}")]
+                             [[str(k + 1), num(f, f"{p}.{key[0]}.{k}"), num(a, f"{p}.{key[1]}.{k}", "g4")]
                               for k, (f, a) in enumerate(zip(freq, sa))], {1, 2}))
         elif freq:
             out.append(f'<p class="muted">The RRS has {len(freq)} points, {freq[0]:g} to {freq[-1]:g} Hz.</p>')
@@ -179,7 +185,7 @@ def _spectra(q: dict) -> str:
             rows.append([str(motion.get("number", m + 1)), axis, where,
                          num(t.get("min_ratio"), f"{tp}.min_ratio"), num(t.get("min_at_hz"), f"{tp}.min_at_hz"),
                          num(t.get("max_ratio"), f"{tp}.max_ratio"), num(t.get("max_at_hz"), f"{tp}.max_at_hz"),
-                         num(t.get("peak_g"), f"{tp}.peak_g"), num(t.get("peak_min_g"), f"{tp}.peak_min_g"),
+                         num(t.get("peak_g"), f"{tp}.peak_g"), num(t.get("peak_min_g"), f"{tp}.peak_min_g", "g4"),
                          '<td class="ok">yes</td>' if t.get("pass") else '<td class="bad">no</td>',
                          num(facts.get("strong_motion_s"), f"{p}.strong_motion_s"),
                          num(facts.get("strong_motion_min_s"), f"{p}.strong_motion_min_s"),

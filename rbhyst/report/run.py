@@ -10,7 +10,7 @@ from matplotlib.ticker import MaxNLocator
 
 from rbhyst.solve.result import Result
 from rbhyst.report._labels import Labels
-from rbhyst.report._style import NEGLIGIBLE, TIME_MARGINS, plain_number, save, styled, subplots, write_png
+from rbhyst.report._style import NEGLIGIBLE, PRINT_WIDTH, TIME_MARGINS, plain_number, save, styled, subplots, write_png
 
 
 def _draw_outline(ax, v: np.ndarray, fill_alpha: float, labels: list[str], placer: Labels) -> None:
@@ -41,8 +41,8 @@ def _shares_line(dp, elements) -> bool:
 
 @styled
 def plot_body(result: Result, path: Path):
-    """The body (every part, the denser darker, with its mass), its mass centre G and its
-    elements (seed Fig. 3a); a damper on an element's line is drawn beside it, in parallel;
+    """The body (every part, the denser darker, with its mass), its mass centre G, its points of
+    interest and its elements (seed Fig. 3a); a damper on an element's line is drawn beside it, in parallel;
     no label covers another (rbhyst.report._labels). Returns the figure (saved to ``path``).
 
     Long because every mark drawn is registered with one label placer, so that no label covers another.
@@ -105,9 +105,13 @@ def plot_body(result: Result, path: Path):
         labels.point(*mid, 2.5)
         labels.add(f"d{k}" + (f" x{dp.count}" if dp.count > 1 else ""), mid, (nx, ny), 4.5, fontsize=7,
                    color="C2")  # off its side, away from the element
+    for name, x in result.layout.points:  # the points of interest (about G), as model3d draws them
+        ax.plot(x[0], x[1], marker="o", ms=5, mfc="white", mec="C1", mew=1.4, zorder=5)
+        labels.point(x[0], x[1], 3.5)
+        labels.add(name, (x[0], x[1]), (x[0] or 1.0, x[1] or 1.0), 4.5, fontsize=7.5, color="C1")
     labels.pending += vertex_labels.pending
     labels.lines += vertex_labels.lines
-    labels.add("G", (0.0, 0.0), (1.0, -1.0), 5.0, fontsize=9)
+    labels.add("G", (0.0, 0.0), (1.0, -1.0), 6.5, fontsize=9)
     ex = result.system.excitation
     if ex.p1 is not None or ex.p2 is not None or ex.m3 is not None:
         ax.plot(*ex.point, marker="*", color="C3", ms=12, zorder=5)
@@ -127,15 +131,19 @@ def plot_body(result: Result, path: Path):
     return fig
 
 
-def _line(ax, result: Result, name: str, scale: float | None = None, unit: str = "", **kw) -> None:
-    """One column against time, drawn through every bucket's extremes: no peak is lost. Where its
-    peak stays below NEGLIGIBLE of ``scale`` (its family's largest, in the column's own unit) the
-    panel says it is at rest instead: a symmetric body's cross response is rounding (1e-17 rad),
-    which a line would show as a response."""
+def _line(ax, result: Result, name: str, scale: float | None = None, unit: str = "", factor: float = 1.0,
+          **kw) -> None:
+    """One column against time, drawn through every bucket's extremes: no peak is lost; times
+    ``factor`` (1e3: metres drawn in mm, ``unit``). Where its peak stays below NEGLIGIBLE of
+    ``scale`` (its family's largest, in the column's own unit) the panel says it is at rest
+    instead: a symmetric body's cross response is rounding (1e-17 rad), which a line would show
+    as a response."""
     peak = result.extremes.peak(name)
     t, y = result.plot.series(result.columns.index(name))
+    y = y * factor if factor != 1.0 else y
     if scale is not None and peak < NEGLIGIBLE * scale:
-        said = "exactly zero" if peak == 0.0 else f"at most {peak:.1e} {unit}, below 1e-9 of the largest: rounding"
+        said = ("exactly zero" if peak == 0.0 else
+                f"at most {peak * factor:.1e} {unit}, below 1e-9 of the largest: rounding")
         at_rest(ax, f"at rest: {said}", time_axis=True)
         ax.plot(t[:1], y[:1] * 0.0, alpha=0.0)  # (the run's time span for the shared axis, drawn by none)
         ax.plot(t[-1:], y[-1:] * 0.0, alpha=0.0)
@@ -156,9 +164,9 @@ def at_rest(ax, text: str, time_axis: bool = False) -> None:
 
 def family_scale(result: Result, family: str) -> dict[str, float]:
     """Each coordinate's column of ``family`` ("d" displacements, "at" total accelerations) and
-    the family's largest peak in that column's unit (estimate.family_scales: a rotation counted
+    the family's largest peak in that column's unit (scales.family_scales: a rotation counted
     at the body's radius of gyration)."""
-    from rbhyst.solve.estimate import family_scales
+    from rbhyst.solve.scales import family_scales
 
     coords = result.system.coordinates
     columns = [c.column(family) for c in coords]
@@ -168,21 +176,56 @@ def family_scale(result: Result, family: str) -> dict[str, float]:
 
 
 @styled
-def plot_excitation(result: Result, path: Path) -> None:
-    """Support acceleration along x1 and x2 (seed Fig. 5), and x3 where a body in space has it."""
+def plot_excitation(result: Result, path: Path):
+    """Support acceleration along each direction that has a signal (seed Fig. 5; x3 where a body
+    in space has it; the others named in the title). A motion over less than a fifth of the run
+    (a shock pulse) is drawn over its own span, from its signal (exact, not the rows at dt).
+    Returns the figure (saved to ``path``)."""
     names = [c for c in result.columns if c.startswith("ag") and c.endswith("_m_s2")]
-    fig, axes = subplots(len(names), 1, figsize=(8, 2.25 * len(names)), sharex=True)
-    for name, ax in zip(names, axes):
-        _line(ax, result, name, lw=0.7, color="C0")
+    signals = {n: getattr(result.system.excitation, n[: -len("_m_s2")], None) for n in names}
+    drawn = [n for n in names if signals[n] is not None] or names
+    run = result.stats.steps * result.settings.dt  # s
+    window = short_motion([signals[n] for n in drawn], run)
+    fig, axes = subplots(len(drawn), 1, figsize=(PRINT_WIDTH, 2.25 * len(drawn) if len(drawn) > 1 else 2.8), sharex=True,
+                         squeeze=False)
+    axes = axes[:, 0]
+    for name, ax in zip(drawn, axes):
+        if window is None:
+            _line(ax, result, name, lw=0.7, color="C0")
+        else:
+            t = np.linspace(*window, 2001)
+            ax.plot(t, signals[name](t), lw=0.9, color="C0")
+            ax.set_xlim(*window)
         ax.set_ylabel(f"{name[:-5]} [m/s²]")
-    axes[0].set_title("Support acceleration")
+    title = "Support acceleration"
+    if window is not None:
+        title += f" over its {window[1] - window[0]:.3g} s of the run's {run:.3g} s"
+    none = [n[2:-5] for n in names if n not in drawn]
+    if none:
+        title += f" (none along x{', x'.join(none)})"
+    axes[0].set_title(title)
     axes[-1].set_xlabel("time [s]")
     save(fig, path, TIME_MARGINS)
+    return fig
 
 
-RESPONSE = (("u1_m", "at1_m_s2", "u1 [m]", "at1 [m/s²]", "mass centre along x1"),
-            ("u2_m", "at2_m_s2", "u2 [m]", "at2 [m/s²]", "mass centre along x2"),
-            ("theta3_rad", "alphat3_rad_s2", "θ3 [rad]", "θt3'' [rad/s²]", "rotation about x3"))
+def short_motion(signals, run: float) -> tuple[float, float] | None:
+    """The span to draw a support motion over (s) where every signal is a pulse ending before a
+    fifth of the run: the pulses' span and half of it on either side (from 0 at the earliest);
+    None for any other motion (drawn over the run)."""
+    spans = [(s.start, s.end) for s in signals if s is not None and hasattr(s, "start") and hasattr(s, "duration")]
+    if not spans or len(spans) < sum(s is not None for s in signals):
+        return None
+    t0, t1 = min(a for a, _ in spans), max(b for _, b in spans)
+    if t1 >= 0.2 * run:
+        return None
+    margin = 0.5 * (t1 - t0)
+    return max(0.0, t0 - margin), t1 + margin
+
+
+RESPONSE = (("u1_m", "at1_m_s2", "u1 [mm]", "at1 [m/s²]", "mass centre along x1"),
+            ("u2_m", "at2_m_s2", "u2 [mm]", "at2 [m/s²]", "mass centre along x2"),
+            ("theta3_rad", "alphat3_rad_s2", "θ3 [mrad]", "θt3'' [rad/s²]", "rotation about x3"))
 
 
 def response_rows(coordinates) -> list[tuple[str, str, str, str, str]]:
@@ -191,12 +234,17 @@ def response_rows(coordinates) -> list[tuple[str, str, str, str, str]]:
     out = []
     for c in coordinates:
         if c.rotation:
-            out.append((c.column("d"), c.column("at"), f"θ{c.axis} [rad]", f"θt{c.axis}'' [rad/s²]",
+            out.append((c.column("d"), c.column("at"), f"θ{c.axis} [mrad]", f"θt{c.axis}'' [rad/s²]",
                         f"rotation about x{c.axis}"))
         else:
-            out.append((c.column("d"), c.column("at"), f"u{c.axis} [m]", f"at{c.axis} [m/s²]",
+            out.append((c.column("d"), c.column("at"), f"u{c.axis} [mm]", f"at{c.axis} [m/s²]",
                         f"mass centre along x{c.axis}"))
     return out
+
+
+#: displacements (m, rad) are drawn in mm and mrad: a mount's millimetres read as they are,
+#: not as 0.002 under a "1e-3" above the axis
+SHOWN_IN_MILLI = 1e3
 
 
 def response_files(coordinates) -> list[str]:
@@ -205,14 +253,14 @@ def response_files(coordinates) -> list[str]:
 
 
 @styled
-def plot_response(result: Result, k: int, path: Path) -> None:
+def plot_response(result: Result, k: int, path: Path):
     """Relative displacement and total acceleration of coordinate k (seed Figs. 6-8), a panel of
     rounding said to be at rest. Returns the figure (saved to ``path``)."""
     rows = response_rows(result.system.coordinates)
     d, at, d_label, at_label, name = rows[k]
     d_scale, at_scale = family_scale(result, "d")[d], family_scale(result, "at")[at]
-    fig, axes = subplots(2, 1, figsize=(8, 4.5), sharex=True)
-    _line(axes[0], result, d, d_scale, d_label.split("[")[1].rstrip("]"), lw=0.8, color="C0")
+    fig, axes = subplots(2, 1, figsize=(PRINT_WIDTH, 4.5), sharex=True)
+    _line(axes[0], result, d, d_scale, d_label.split("[")[1].rstrip("]"), SHOWN_IN_MILLI, lw=0.8, color="C0")
     axes[0].set_ylabel(d_label)
     axes[0].set_title(f"Relative displacement and total acceleration: {name}")
     _line(axes[1], result, at, at_scale, at_label.split("[")[1].rstrip("]"), lw=0.6, color="C1")
@@ -223,23 +271,24 @@ def plot_response(result: Result, k: int, path: Path) -> None:
 
 
 @styled
-def plot_point(result: Result, name: str, path: Path) -> None:
+def plot_point(result: Result, name: str, path: Path):
     """Relative displacement and total acceleration of a point of interest along x1 and x2 (and x3
-    in space)."""
+    in space). Returns the figure (saved to ``path``)."""
     x = dict(result.layout.points)[name] + result.system.body.mass_centre
     axes_of = [c.axis for c in result.system.coordinates if not c.rotation]
-    rows = ([(f"{name}_u{k}_m", f"u{k} [m]", "C0") for k in axes_of]
+    rows = ([(f"{name}_u{k}_m", f"u{k} [mm]", "C0") for k in axes_of]
             + [(f"{name}_at{k}_m_s2", f"at{k} [m/s²]", "C1") for k in axes_of])
-    fig, axes = subplots(len(rows), 1, figsize=(8, 1.75 * len(rows)), sharex=True)
+    fig, axes = subplots(len(rows), 1, figsize=(PRINT_WIDTH, 1.75 * len(rows)), sharex=True)
     tops = {kind: max(result.extremes.peak(c) for c, _, _ in rows if f"_{kind}" in c) for kind in ("u", "at")}
     for ax, (column, label, colour) in zip(axes, rows):
         _line(ax, result, column, tops["at" if "_at" in column else "u"], label.split("[")[1].rstrip("]"),
-              lw=0.7, color=colour)
+              1.0 if "_at" in column else SHOWN_IN_MILLI, lw=0.7, color=colour)
         ax.set_ylabel(label)
     axes[0].set_title(f"Relative displacement and total acceleration: point {name} "
                       f"({', '.join(f'{c:.4g}' for c in x)}) m")
     axes[-1].set_xlabel("time [s]")
     save(fig, path, TIME_MARGINS)
+    return fig
 
 
 @styled
@@ -249,9 +298,11 @@ def plot_element_loops(result: Result, path: Path):
     system = result.system
     sample = result.plot.sample
     n = len(system.elements)
-    cols = min(n, 3)
+    # the page's width in two columns up to four elements, three beyond (their rows must fit a page too)
+    cols = min(n, 2 if n <= 4 else 3)
     rows = math.ceil(n / cols)
-    fig, axes = subplots(rows, cols, figsize=(3.4 * cols, 3.0 * rows), squeeze=False)
+    fig, axes = subplots(rows, cols, figsize=(PRINT_WIDTH * cols / (2 if n <= 4 else 3), (3.0 if n <= 4 else 2.6) * rows),
+                         squeeze=False)
     first = np.cumsum([0] + [el.count for el in system.elements])[:-1]
     peak_f = [result.extremes.peak(f"e{k + 1}_f_N") for k in first]
     top = max(peak_f, default=0.0)
@@ -268,13 +319,19 @@ def plot_element_loops(result: Result, path: Path):
         u = sample[:, result.columns.index(f"e{k + 1}_u_m")]
         f = sample[:, result.columns.index(f"e{k + 1}_f_N")]
         ax.plot(u * 1e3, f * 1e-3, lw=0.7)
-        if el.stroke is not None:  # the stroke it can take
+        view = loop_view(float(u.min()) * 1e3, float(u.max()) * 1e3, el.stroke)
+        ax.set_xlim(*view)
+        if el.stroke is not None:  # the stroke it can take: drawn where it is in view, said in the legend
             lo, hi = el.stroke
-            for limit in el.stroke:
-                ax.axvline(limit * 1e3, color="C3", lw=0.9, ls="--",
-                           label=f"stroke limits {plain_number(lo * 1e3)}, +{plain_number(hi * 1e3)} mm"
-                           if limit == lo else None)
-            ax.legend(fontsize=6.5, loc="best", framealpha=0.9)
+            shown = [x * 1e3 for x in el.stroke if view[0] <= x * 1e3 <= view[1]]
+            said = f"stroke limits {plain_number(lo * 1e3)}, +{plain_number(hi * 1e3)} mm"
+            if len(shown) < 2:
+                said += ",\nbeyond the axis" if not shown else ",\none beyond the axis"
+            for j, x in enumerate(shown):
+                ax.axvline(x, color="C3", lw=0.9, ls="--", label=said if j == 0 else None)
+            if not shown:  # (the legend's entry without a line in view)
+                ax.plot([], [], color="C3", lw=0.9, ls="--", label=said)
+            ax.legend(fontsize=8, loc="best", framealpha=0.9)
         ax.set_xlabel("u [mm]")
         ax.set_ylabel("f [kN]")
         # at most five labelled ticks a side: "-0.10 -0.05 0.00 0.05 0.10 0.15" runs together
@@ -288,28 +345,48 @@ def plot_element_loops(result: Result, path: Path):
     return fig
 
 
+def loop_view(lo: float, hi: float, stroke: tuple[float, float] | None) -> tuple[float, float]:
+    """The deformation axis of a loop (mm) from the loop itself (from ``lo`` to ``hi``, 8 % beside
+    it), widened to a stroke limit only where the loop would still fill half the axis: a +-4 mm
+    loop under +-60 mm strokes is a loop, not a sliver."""
+    span = max(hi - lo, 1e-12)
+    a, b = lo - 0.08 * span, hi + 0.08 * span
+    for limit in (x * 1e3 for x in stroke or ()):
+        wider = (min(a, limit - 0.04 * span), max(b, limit + 0.04 * span))
+        if span >= 0.5 * (wider[1] - wider[0]):
+            a, b = wider
+    return a, b
+
+
 @styled
 def plot_energy(result: Result, path: Path):
     """Cumulative input, kinetic and hysteretic energy, and the balance error. Input and
     hysteretic energy nearly coincide where little is kinetic or viscous: the input is a broad
     light band under the others, the hysteretic energy a dashed line on it. Returns the figure
     (saved to ``path``)."""
-    fig, axes = subplots(2, 1, figsize=(8, 4.8), sharex=True, height_ratios=(3, 1))
+    fig, axes = subplots(2, 1, figsize=(PRINT_WIDTH, 4.8), sharex=True, height_ratios=(3, 1))
     _line(axes[0], result, "E_input_J", label="input", lw=3.5, color="C0", alpha=0.4, zorder=2,
           solid_capstyle="butt")
-    _line(axes[0], result, "E_hysteretic_J", label="hysteretic (dissipated + stored)", lw=1.1, color="C1",
+    _line(axes[0], result, "E_hysteretic_J", label="hysteretic\n(dissipated + stored)", lw=1.1, color="C1",
           ls=(0, (5, 2)), zorder=4)
     if "E_viscous_J" in result.columns:
         _line(axes[0], result, "E_viscous_J", label="viscous", lw=1.0, color="C2", zorder=3)
     _line(axes[0], result, "E_kinetic_J", label="kinetic", lw=0.7, color="C3", zorder=3)
     axes[0].set_ylabel("energy [J]")
-    axes[0].legend(loc="upper left", fontsize=8)
+    # beside the axes: inside, wherever it went, some scene's curves ran under it (a pulse's input
+    # rises at once to the top left, a long record's kinetic energy runs along the bottom)
+    axes[0].legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), fontsize=8, borderaxespad=0.0)
     axes[0].set_title(f"Energy balance (relative error {result.energy_balance:.2e})")
     _line(axes[1], result, "E_error_J", lw=0.7, color="C4")  # (not the kinetic line's colour)
     axes[1].set_ylabel("error [J]")
     axes[1].set_xlabel("time [s]")
-    save(fig, path, TIME_MARGINS)
+    left, _, bottom, top, gap = TIME_MARGINS
+    save(fig, path, (left, ENERGY_LEGEND_WIDTH, bottom, top, gap))
     return fig
+
+
+#: the right margin of energy.png that holds its legend, inches
+ENERGY_LEGEND_WIDTH = 2.0
 
 
 def write_plots(result: Result, out: Path) -> list[str]:

@@ -2,13 +2,12 @@
 
 from __future__ import annotations
 
-import textwrap
 from pathlib import Path
 
 import numpy as np
 
 from rbhyst.solve.located import CENTRE, GROUND, LocatedSpectra
-from rbhyst.report._style import NEGLIGIBLE, plain_log_ticks, plain_number, save, styled, subplots
+from rbhyst.report._style import NEGLIGIBLE, PRINT_WIDTH, plain_log_ticks, plain_number, save, styled, subplots
 
 G_STANDARD = 9.80665
 #: one line style per damping ratio, in the deck's order
@@ -27,6 +26,23 @@ def shown_directions(spectra: LocatedSpectra) -> tuple[list[str], dict[str, floa
     return [d for d in directions if d not in dropped], dropped
 
 
+def phrase_wrap(line: str, width: int) -> str:
+    """``line`` in lines of at most about ``width`` characters, broken only between its phrases
+    (after ": ", ", ", "; " or before " ("), never inside one: "no response along x1 (sa at most
+    3.7e-14 m/s², ..." keeps "sa at most 3.7e-14 m/s²" whole."""
+    import re
+
+    pieces = re.split(r"(?<=[:;,]) | (?=\()", line)
+    out, current = [], ""
+    for piece in pieces:
+        if current and len(current) + 1 + len(piece) > width:
+            out.append(current)
+            current = piece
+        else:
+            current = f"{current} {piece}" if current else piece
+    return "\n".join(out + [current])
+
+
 @styled
 def plot_spectra(spectra: LocatedSpectra, path: Path, title: str = ""):
     """sa against frequency, log axes, one panel per direction: the ground in black, G and
@@ -37,8 +53,9 @@ def plot_spectra(spectra: LocatedSpectra, path: Path, title: str = ""):
     shaded. Returns the figure (saved to ``path``)."""
     s = spectra.spectrum
     directions, dropped = shown_directions(spectra)
-    width = max(5.2 * len(directions), 6.4 if dropped else 0.0)
-    fig, axes = subplots(1, len(directions), figsize=(width, 4.4), squeeze=False)
+    # one panel a row, as wide as a printed page: its texts print at their sizes
+    width = PRINT_WIDTH
+    fig, axes = subplots(len(directions), 1, figsize=(width, 0.9 + 3.4 * len(directions)), squeeze=False)
     colours = {loc: "k" if loc == GROUND else f"C{i}" for i, loc in
                enumerate(loc for loc in spectra.locations if loc != GROUND)}
     colours[GROUND] = "k"
@@ -53,8 +70,12 @@ def plot_spectra(spectra: LocatedSpectra, path: Path, title: str = ""):
                 label = ("ground" if loc == GROUND else "G (mass centre)" if loc == CENTRE else loc)
                 if len(s.dampings) > 1:
                     label += f", ζ = {zeta:g}"
+                # G a broad light band under the points' lines: a point near G (or moving as G does)
+                # would hide it otherwise
                 ax.plot(f[order], sa[order, j], color=colours[loc], ls=DAMPING_STYLES[j % len(DAMPING_STYLES)],
-                        lw=1.6 if loc == GROUND else 1.1, zorder=3 if loc == GROUND else 2, label=label)
+                        lw={GROUND: 1.6, CENTRE: 3.2}.get(loc, 1.1), alpha=0.45 if loc == CENTRE else 1.0,
+                        zorder={GROUND: 3, CENTRE: 1.5}.get(loc, 2), label=label,
+                        solid_capstyle="butt")
         ax.set_xscale("log")
         ax.set_yscale("log")
         nyquist = spectra.nyquist_hz(direction)
@@ -72,12 +93,12 @@ def plot_spectra(spectra: LocatedSpectra, path: Path, title: str = ""):
         g_axis = ax.secondary_yaxis("right", functions=(lambda a: a / G_STANDARD, lambda a: a * G_STANDARD))
         g_axis.set_ylabel("sa [g]")
         plain_log_ticks(g_axis.yaxis)
-        ax.legend(fontsize=7, loc="best")
+        ax.legend(fontsize=8, loc="best")
     damping = ", ".join(f"{z:g}" for z in s.dampings)
     heading = "Response spectra (maximax absolute acceleration)" + (f": {title}" if title else "")
     lines = [heading, f"damping {damping}"]
     lines += [f"no response along {d} (sa at most {v:.2g} m/s², below {plain_number(NEGLIGIBLE)} of the largest: "
               "rounding)" for d, v in dropped.items()]
-    fig.suptitle("\n".join(textwrap.fill(line, int(13 * width)) for line in lines), fontsize=9)
+    fig.suptitle("\n".join(phrase_wrap(line, int(13 * width)) for line in lines), fontsize=9)
     save(fig, path)
     return fig

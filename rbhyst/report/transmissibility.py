@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from rbhyst.report._style import plain_log_ticks, save, styled, subplots
+from rbhyst.report._style import plain_log_ticks, styled, subplots, write_png
 
 G_STANDARD = 9.80665
 #: a cross response below this is not drawn (a symmetric body's is rounding: 1e-17)
@@ -51,10 +51,14 @@ def plot_transmissibility(result, path: Path, title: str = ""):
         ax.set_ylabel("T = peak |at| / amplitude")
         ax.set_title("G (mass centre)" if loc == "G" else f"point {loc}")
         ax.grid(True, which="both", alpha=0.25)
-        ax.legend(fontsize=7, loc="best")
     for ax in axes.flat[len(locations):]:
         ax.set_visible(False)
+    # one legend for every panel (their curves are the same amplitudes and directions), under
+    # them: inside a panel it covered the low frequencies' curves
+    handles, labels = axes.flat[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside lower center", ncol=min(2, len(labels)), fontsize=8)
     heading = f"Transmissibility, stepped sine along {result.direction}" + (f"\n{title}" if title else "")
     fig.suptitle(heading, fontsize=9)
-    save(fig, path)
+    fig.set_layout_engine("constrained")
+    write_png(fig, path)
     return fig

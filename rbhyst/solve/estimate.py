@@ -52,6 +52,7 @@ import numpy as np
 
 from rbhyst.errors import AnalysisError
 from rbhyst.solve.history import estimate_columns, largest_abs
+from rbhyst.solve.scales import AT_REST, family_scales, to_length as _to_length  # noqa: F401
 from rbhyst.model.system import System
 from rbhyst.solve.static import at_rest_under_gravity
 
@@ -68,9 +69,6 @@ STEP_BUDGET = 400
 #: 100-300 rtol on the sample decks and cases), then 100 times tighter until met or RTOL_MIN
 RTOL_PER_TOL = 1e-3
 RTOL_MIN = 1e-13
-#: a column whose reference stays below this fraction of its family's scale is at rest: its error
-#: is measured against the family's scale (the rotation of a symmetric scene, a cross acceleration)
-AT_REST = 1e-9
 #: a column whose peak stays below this fraction of its family's scale is small against the motion
 #: that matters (the torsion a symmetric body's rocking couples in with exact rotations, a cross
 #: acceleration): its error is stated against this fraction of the scale, so that a tiny
@@ -88,24 +86,6 @@ def relative_errors(d: np.ndarray, d_ref: np.ndarray, system: System) -> tuple[f
     """max_t |q - q_ref| / max_t |q_ref| per coordinate (u1, u2, theta3: ``study``'s measure)."""
     keys = [c.key("d") for c in system.coordinates]
     return tuple(float(x) for x in column_errors(d, d_ref, keys, ["d"] * len(keys), system))
-
-
-def _to_length(keys, system: System) -> np.ndarray:
-    """What turns each column into its family's translational measure: the radius of gyration
-    for a rotation or angular acceleration (sqrt(J / m), the rotation's mass over the first
-    translation's), its inverse for a moment; 1 for the others."""
-    coords = system.coordinates
-    masses = system.mass
-    frame = getattr(system, "frame", None)
-    if frame is not None:  # the columns are in the deck's axes: the diagonal of M there
-        masses = np.einsum("ij,j,ij->i", frame, system.mass, frame)
-    mass = next((masses[j] for j, c in enumerate(coords) if not c.rotation), None)
-    factor = {}
-    for j, c in enumerate(coords):
-        if c.rotation and mass is not None:
-            rg = math.sqrt(masses[j] / mass)
-            factor.update({c.key("d"): rg, c.key("at"): rg, c.key("R"): 1.0 / rg})
-    return np.array([factor.get(k, 1.0) for k in keys])
 
 
 def column_errors(values: np.ndarray, ref: np.ndarray, keys, families, system: System) -> np.ndarray:
@@ -487,16 +467,6 @@ def family_terms(errors: dict, result) -> tuple[dict, set]:
             if p < QUIET * f:
                 quiet.add(k)
     return out, quiet
-
-
-def family_scales(peak: np.ndarray, keys, families, system: System) -> np.ndarray:
-    """Each column's family's scale (error_scales): the family's largest peak in its measure."""
-    length = _to_length(keys, system)
-    index: dict = {}
-    family = np.array([index.setdefault(f, len(index)) for f in families], dtype=np.intp)
-    top = np.zeros(len(index))
-    np.maximum.at(top, family, peak * length)  # each family's largest peak, in its measure
-    return top[family] / length
 
 
 def ranked(errors: dict, limit: float, family: dict | None = None, quiet=()) -> list[tuple[str, float]]:

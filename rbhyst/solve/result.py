@@ -68,6 +68,8 @@ class Result:
     #: (result, out, plots=) -> folder: what :meth:`write` calls (set by the pipeline above)
     writer: Callable | None = field(default=None, repr=False, compare=False)
     deck: dict | None = None  # the deck as run (its keys as given, the run's overrides applied)
+    #: when, by which rbhyst and command, from which files (rbhyst.files.provenance)
+    provenance: dict | None = None
     #: the kinematic model and the error it carries (rbhyst.solve.kinematic), when checked
     kinematics: dict | None = None
 
@@ -190,11 +192,20 @@ class Result:
             **({"kinematics": self.kinematics} if self.kinematics is not None else {}),
             "peaks": e.peaks(),
             "extremes": e.as_dict(),
+            "at_rest": self.at_rest(),
             "notes": list(self.notes),
             "warnings": list(self.warnings),
             **({"spectra": self.spectra.summary()} if self.spectra is not None else {}),
             **({"deck": self.deck} if self.deck is not None else {}),
+            **({"provenance": self.provenance} if self.provenance is not None else {}),
         }
+
+    def at_rest(self) -> list[str]:
+        """The columns the run leaves at rest, to rounding (scales.at_rest_columns): their peaks
+        are shown as 0."""
+        from rbhyst.solve.scales import at_rest_columns
+
+        return at_rest_columns(self)
 
     def energy_summary(self) -> dict:
         """summary.json's ``energy``: the balance's error and the work of the load, the elements

@@ -224,7 +224,7 @@ def ieee693_formula(level: str, damping: float, factor: float = 1.0) -> str:
     scale = IEEE693_LEVELS[level] * factor
     return (f"{scale:g} x [2.288 beta f below 1.1 Hz; 2.5 beta from 1.1 to 8 Hz; (26.4 beta - 10.56) / f - 0.8 beta "
             f"+ 1.32 from 8 to 33 Hz; 1.0 above 33 Hz] g, f in Hz, beta = (3.21 - 0.68 ln(100 zeta)) / 2.1156 = "
-            f"{ieee693_beta(damping):.6g} at zeta = {damping:g}")
+            f"{ieee693_beta(damping):.4g} at zeta = {damping:g}")
 
 
 def ieee693(level: str, damping: float | None = None) -> dict[str, RRS]:

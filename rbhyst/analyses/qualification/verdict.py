@@ -27,6 +27,7 @@ from rbhyst.analyses.qualification import free_vibration, matching, strong_motio
 from rbhyst.analyses.qualification.table import Table, read_table, table_problems
 from rbhyst.analyses.qualification.rrs import PLANE_AXES, SPACE_AXES, STANDARDS, G, RRS, requested_rrs
 from rbhyst.errors import InputError
+from rbhyst.model.inputs import deck_inputs, resolved
 
 #: with statistic = "mean": from this many motions on the demand is the mean over them, below it
 #: the largest (ASCE 7-10 16.2.4)
@@ -54,6 +55,8 @@ class Request:
     statistic: str = "max"
     #: the shake table's limits (table.Table; None: none)
     table: object = None
+    #: the RRS files read: (deck key or option, path, name as given), for the report's checksums
+    files: list = field(default_factory=list)
 
     @property
     def vertical(self) -> str:
@@ -134,10 +137,12 @@ def request(deck, cli: dict) -> Request:
                         "as vertical in space (the vertical spectrum drives x3)")
     if problems:
         raise InputError(problems)
+    files = [(keys[k], resolved(values[k], deck.base), values[k]) for k in ("rrs", "rrs_x2", "rrs_x3")
+             if standard is None and isinstance(values.get(k), str)]
     return Request(rrs, standard, motions, int(values.get("seed", 1)), float(values.get("duration", 30.0)),
                    float(values.get("motion_dt", 0.005)), values.get("acceleration_limit_g") or {},
                    values.get("force_capacity_N"), dict(SPACE_AXES if space else PLANE_AXES),
-                   values.get("statistic", "max"), limits)
+                   values.get("statistic", "max"), limits, files)
 
 
 def output_files(req: Request) -> list[str]:
@@ -220,17 +225,20 @@ class Verdict:
 
 
 def qualify(deck, req: Request, folder: Path, integrator: str | None = None, dt: float | None = None,
-            tolerance: float | None = None, say=None) -> Verdict:
+            tolerance: float | None = None, say=None, command: str | None = None) -> Verdict:
     """Make or take the motions, run the deck on each, judge every criterion; write into ``folder``
     (a staging folder): qualification.json, trs.csv, motions.json (with motions made), the
     motions' records and run_<k>/summary.json (the plot is the caller's: report.qualification).
+    ``command``: the command line qualification.json's ``provenance`` records (None: Python).
 
     Long because it is the qualification's pipeline read top to bottom: the motions, their
     check, the runs, the criteria."""
     from rbhyst._version import __version__
+    from rbhyst.files.provenance import provenance
     from rbhyst.results.writers import deck_as_run, write_summary
 
     folder = Path(folder).resolve()  # the runs' decks name the motions' files from their own folder
+    facts = provenance(command, qualification_inputs(deck, req))
     runs = []  # (label, summary dict)
     notes: list[str] = []
     given = _own_motion(deck, req) if req.motions == "deck" else _made_motions(deck, req, folder, notes)
@@ -286,6 +294,7 @@ def qualify(deck, req: Request, folder: Path, integrator: str | None = None, dt:
         "free_vibration": {"rule": free_vibration.RULE},
         # the deck as given, with the command's overrides (each made motion takes excitation.support's place)
         "deck_as_run": deck_as_run(deck, integrator=integrator, dt=dt, tolerance=tolerance),
+        "provenance": facts,
     }
     (folder / "qualification.json").write_text(json.dumps(data, indent=2) + "\n", encoding="utf-8")
     est = accuracy["estimated_error"]
@@ -404,6 +413,15 @@ def _made_motions(deck, req: Request, folder: Path, notes: list) -> GivenMotions
                         all(r.check.in_band for r in records) and
                         all(m.correlation is None or abs(m.correlation) < matching.MAX_CORRELATION for m in made),
                         all(r.check.peak_ok for r in records), all(r.strong_ok for r in records))
+
+
+def qualification_inputs(deck, req: Request) -> list[tuple[str, Path, str]]:
+    """The files a qualification reads: the deck, the RRS files asked for (the deck's or the
+    command line's), the deck's records where its own motion is the test's, and its force files."""
+    own = [i for i in deck_inputs(deck) if not i[0].startswith("qualify.")
+           and (req.motions == "deck" or not i[0].startswith("excitation.support."))]
+    first = [i for i in own if i[0] == "deck"]
+    return first + req.files + [i for i in own if i[0] != "deck"]
 
 
 def _deck_trs(excitation, duration: float, rrs: dict[str, RRS]) -> dict:
