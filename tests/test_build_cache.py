@@ -42,7 +42,8 @@ def test_the_key_follows_sources_versions_and_compiler_settings(tmp_path):
 
 def test_the_cache_folder_is_the_users_unless_named_or_switched_off(tmp_path):
     assert build_cache.cache_folder({"HOME": "/home/u"}) == build_cache.Path("/home/u/.cache/rbhyst/kernels")
-    assert build_cache.cache_folder({"HOME": "/home/u", "XDG_CACHE_HOME": "/c"}) == build_cache.Path("/c/rbhyst/kernels")
+    xdg = {"HOME": "/home/u", "XDG_CACHE_HOME": "/c"}
+    assert build_cache.cache_folder(xdg) == build_cache.Path("/c/rbhyst/kernels")
     assert build_cache.cache_folder({"RBHYST_KERNEL_CACHE": str(tmp_path)}) == tmp_path
     assert build_cache.cache_folder({"RBHYST_KERNEL_CACHE": "off", "HOME": "/home/u"}) is None
 

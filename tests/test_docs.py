@@ -203,9 +203,10 @@ def test_every_column_of_a_body_in_space_is_in_the_reference(tmp_path):
     rbhyst.run(write_deck(tmp_path, data), out=folder)
     text = section((DOCS / "explanation" / "space.md").read_text(), "Columns")
     # "a1_m_s2..a3_m_s2": the range's every member
-    text = re.sub(r"(\w*?)(\d)(_\w+)\.\.\w*?(\d)_\w+",
-                  lambda m: ",".join(f"{m.group(1)}{i}{m.group(3)}" for i in range(int(m.group(2)), int(m.group(4)) + 1)),
-                  text)
+    def members(m):
+        return ",".join(f"{m.group(1)}{i}{m.group(3)}" for i in range(int(m.group(2)), int(m.group(4)) + 1))
+
+    text = re.sub(r"(\w*?)(\d)(_\w+)\.\.\w*?(\d)_\w+", members, text)
     text = text.replace("`<name>_u1_m,_u2_m,_u3_m,_at1_m_s2,_at2_m_s2,_at3_m_s2`",
                         ",".join(f"<name>_{c}" for c in ("u1_m", "u2_m", "u3_m", "at1_m_s2", "at2_m_s2", "at3_m_s2")))
     reference = text + (DOCS / "reference" / "outputs.md").read_text()
