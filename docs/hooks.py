@@ -16,7 +16,7 @@ import re
 MARKERS = {"<!-- rbhyst:deck-keys -->": "deck_keys_markdown", "<!-- rbhyst:cli -->": "cli_markdown"}
 
 
-def on_page_markdown(markdown, page, config, files):  # noqa: ARG001 (MkDocs' signature)
+def on_page_markdown(markdown, page, config, files):
     for marker, name in MARKERS.items():
         if marker in markdown:
             markdown = markdown.replace(marker, globals()[name]())

@@ -15,14 +15,13 @@ import sys
 from pathlib import Path
 
 import pytest
-
 from conftest import DECKS, ROOT, seed_deck, write_deck
 
 DOCS = ROOT / "docs"
 TUTORIALS = sorted((DOCS / "tutorials").glob("*.md"))
-FENCE = re.compile(r"^```(\w*)[^\n]*\n(.*?)^```\s*$", re.M | re.S)
+FENCE = re.compile(r"^```(\w*)[^\n]*\n(.*?)^```\s*$", re.MULTILINE | re.DOTALL)
 #: the line CI runs (.ci/run)
-CI_LINE = re.compile(r"^pip install .*\[test\].*pytest", re.M)
+CI_LINE = re.compile(r"^pip install .*\[test\].*pytest", re.MULTILINE)
 
 
 def hooks():
@@ -69,7 +68,7 @@ def test_the_readme_is_short_and_its_quick_start_is_two_commands_ci_runs_the_sec
     text = (ROOT / "README.md").read_text()
     assert len(text.splitlines()) <= 300
     quick = section(text, "Quick start")
-    (lang, body), = [b for b in blocks(quick) if b[0] == "sh"]
+    (_, body), = [b for b in blocks(quick) if b[0] == "sh"]
     lines = [line for line in body.splitlines() if line.strip()]
     assert len(lines) == 2
     assert lines[0].startswith("python3 -m venv .venv && . .venv/bin/activate && pip install . ")
@@ -192,9 +191,9 @@ def test_every_column_and_file_a_run_writes_is_in_the_reference(tmp_path):
 
 
 def test_every_column_of_a_body_in_space_is_in_the_reference(tmp_path):
-    import rbhyst
-
     from test_isolators import isolator_cabinet
+
+    import rbhyst
 
     data = isolator_cabinet()
     data["analysis"]["duration"] = 0.2
