@@ -44,8 +44,9 @@ class BuildKernels(build_ext):
                 say(f"the kernels built ahead of time come from the cache {found.parent} (same sources, "
                     "numba and platform): no compiling")
                 return
-            say("compiling the kernels ahead of time with numba (some 5 minutes on 2 cores; kept in "
-                f"{folder if folder is not None else 'no cache (RBHYST_KERNEL_CACHE=off)'} for the next install)")
+            kept_in = (f"kept in {folder} for the next install" if folder is not None
+                       else "RBHYST_KERNEL_CACHE=off: not kept")
+            say(f"compiling the kernels ahead of time with numba (some 5 minutes on 2 cores; {kept_in})")
             start = time.perf_counter()
             os.makedirs(self.build_temp, exist_ok=True)
             objects, _ = ext._cc._compile_object_files(self.build_temp)  # numba's ahead-of-time compiler

@@ -62,6 +62,20 @@ def test_kept_and_found_again_whole(tmp_path):
     assert build_cache.keep(tmp_path / "ro", "k", built) is None  # cannot write: no error, no cache
 
 
+def test_the_cache_keeps_the_newest_builds_and_nothing_else_is_touched(tmp_path):
+    built = tmp_path / "_aot.so"
+    built.write_bytes(b"compiled")
+    cache = tmp_path / "cache"
+    keys = [f"{k:064x}" for k in range(build_cache.KEEP + 3)]
+    for age, key in enumerate(keys):
+        build_cache.keep(cache, key, built)
+        os.utime(cache / key, (1e9 + age, 1e9 + age))  # each newer than the one before
+    (cache / "notes").mkdir()
+    build_cache.keep(cache, keys[-1], built)
+    left = sorted(p.name for p in cache.iterdir())
+    assert left == sorted(keys[-build_cache.KEEP:] + ["notes"])
+
+
 def test_setup_copies_a_cached_build_instead_of_compiling(tmp_path):
     """setup.py's build_ext with the extension in the cache under the key of these sources and
     this environment's numba: the built module is the cached file's bytes, made in seconds (a

@@ -23,6 +23,9 @@ from pathlib import Path
 
 #: the environment variable naming the cache folder, or switching the cache off ("off")
 CACHE_VARIABLE = "RBHYST_KERNEL_CACHE"
+#: how many builds the cache keeps (the newest): a working copy whose kernels are edited and
+#: installed again and again would otherwise fill it, a megabyte a build
+KEEP = 8
 #: the environment variables that change what the compiler makes
 COMPILER_VARIABLES = ("CC", "CFLAGS", "LDFLAGS", "LDSHARED", "NUMBA_CPU_NAME", "NUMBA_CPU_FEATURES", "NUMBA_OPT")
 
@@ -84,7 +87,13 @@ def cached(folder: Path | None, key: str, filename: str) -> Path | None:
     if folder is None:
         return None
     path = Path(folder) / key / filename
-    return path if path.is_file() and path.stat().st_size > 0 else None
+    if not (path.is_file() and path.stat().st_size > 0):
+        return None
+    try:
+        os.utime(path.parent)  # used now: the newest builds are those prune keeps
+    except OSError:
+        pass
+    return path
 
 
 def keep(folder: Path | None, key: str, built: Path) -> Path | None:
@@ -106,4 +115,17 @@ def keep(folder: Path | None, key: str, built: Path) -> Path | None:
         if tmp is not None and os.path.exists(tmp):
             os.unlink(tmp)
         return None
+    prune(Path(folder))
     return target
+
+
+def prune(folder: Path, keep: int = KEEP) -> list[Path]:
+    """Remove all but the ``keep`` newest builds of the cache; only folders named by a key (64 hex
+    digits) are ever touched, whatever else a folder chosen by RBHYST_KERNEL_CACHE holds."""
+    builds = [p for p in folder.iterdir() if p.is_dir() and len(p.name) == 64
+              and all(c in "0123456789abcdef" for c in p.name)]
+    builds.sort(key=lambda p: p.stat().st_mtime, reverse=True)
+    removed = builds[keep:]
+    for old in removed:
+        shutil.rmtree(old, ignore_errors=True)
+    return removed
