@@ -69,9 +69,14 @@ def _constraint(prop: dict) -> str:
                 out.append(f"{sign} {node[key]:g}")
         if "minItems" in node or "maxItems" in node:
             lo, hi = node.get("minItems"), node.get("maxItems")
-            out.append(f"{lo} items" if lo == hi else f"{lo or 0}..{hi if hi is not None else ''} items".rstrip("."))
+            if lo == hi:
+                out.append(f"{lo} items")
+            elif hi is None:
+                out.append(f"at least {lo} item{'s' if lo != 1 else ''}")
+            else:
+                out.append(f"{lo or 0} to {hi} items")
         if "minProperties" in node:
-            out.append(f"at least {node['minProperties']}")
+            out.append(f"at least {node['minProperties']} entr{'ies' if node['minProperties'] != 1 else 'y'}")
         items = node.get("items")
         if isinstance(items, dict) and "$ref" not in items:
             inner = _constraint(items)
@@ -85,6 +90,8 @@ def _default(prop: dict, required: bool) -> str:
         return "required"
     if "default" not in prop or prop["default"] is None:
         return "-"
+    if isinstance(prop["default"], dict):
+        return "its keys' defaults"
     return f"`{json.dumps(prop['default'])}`"
 
 
@@ -151,7 +158,7 @@ def deck_key_tables() -> list[tuple[str, list[str], str, list[list[str]]]]:
 def deck_keys_markdown() -> str:
     parts = []
     for name, where, about, rows in deck_key_tables():
-        title = "The deck's top level" if name == "(top level)" else name
+        title = "The deck's top level" if name == "(top level)" else f"{where[0] if where else name} ({name})"
         parts.append(f'### {title} {{#{_anchor(name) if name != "(top level)" else "table-top-level"}}}\n')
         parts.append("At: " + ", ".join(f"`{w}`" for w in where) + "\n")
         if about:
