@@ -1,6 +1,6 @@
 """rbhyst: nonlinear dynamics of rigid bodies, in the plane or in space, on Vaiana-Rosati hysteretic supports.
 
-The Python API (see README, "Python API"): ``load_deck``, ``run``, and the ``Result`` they give;
+The Python API (docs/reference/api.md): ``load_deck``, ``run``, and the ``Result`` they give;
 ``modes``, the body's natural frequencies and mode shapes.
 """
 

@@ -35,7 +35,7 @@ def run(deck: Deck | str | Path, integrator: str | None = None, dt: float | None
     they are streamed into ``out/time_history.csv`` beside summary.json and, if ``plots``
     (default: the deck's output.plots), the PNGs, and only the reductions stay in memory:
     the way to run what does not fit. ``tolerance``: the accuracy asked for (rbhyst chooses
-    how, see README "Accuracy"); ``estimate``: whether to estimate the error (default: the
+    how, see docs/explanation/accuracy.md); ``estimate``: whether to estimate the error (default: the
     deck's analysis.estimate_error, true); ``keep=False`` without ``out``: keep only the
     reductions (peaks, extremes, accuracy), as a sweep does. ``monitor``: an object with
     ``note(text)`` (what to say before the run starts, such as the size of a large CSV) and

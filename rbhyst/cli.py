@@ -966,6 +966,31 @@ def qualify(
 EXIT_VERDICT = 1
 
 
+@app.command(cls=Command)
+def schema(
+    out: Annotated[Optional[Path], typer.Option(
+        "--out", help="Write the schema to this file instead of standard output.")] = None,
+):
+    """The deck's JSON Schema (draft 2020-12), for editors that complete and check decks as they
+    are typed: a TOML deck's first line `#:schema ./deck.schema.json` (taplo, Even Better TOML),
+    a YAML deck's `# yaml-language-server: $schema=./deck.schema.json`.
+    """
+    import json
+
+    from rbhyst.model.schema import deck_schema
+
+    text = json.dumps(deck_schema(), indent=2, ensure_ascii=False) + "\n"
+    if out is None:
+        sys.stdout.write(text)
+        return
+    with user_errors():
+        try:
+            out.write_text(text, encoding="utf-8")
+        except OSError as err:
+            raise InputError(f"--out {out}: cannot write it ({err.strerror or err})") from None
+    say(f"wrote {out}")
+
+
 def output_dir(deck, deck_path: Path) -> Path:
     """output.directory relative to the deck's folder, default results/<deck stem>/."""
     if deck.output.directory is not None:

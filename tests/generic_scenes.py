@@ -27,7 +27,7 @@ FIXED_STEP = ("chang", "central-difference", "newmark", "kr-alpha")
 
 
 def spring(k: float) -> np.ndarray:
-    """A linear spring as a VRM set: equal limiting curves kb u, no f0 (README, Hysteresis sets)."""
+    """A linear spring as a VRM set: equal limiting curves kb u, no f0 (docs/reference/deck.md, Hysteresis sets)."""
     branch = {"kb": k, "alpha": 100.0}
     return parameter_set(branch, branch)
 

@@ -1,4 +1,4 @@
-"""A rigid body in space (README, Three dimensions): mass properties of polyhedra against closed
+"""A rigid body in space (docs/explanation/space.md): mass properties of polyhedra against closed
 forms, a prism that reproduces the plane body's run, the principal-axes transform against the
 same scene built in principal axes, the energy balance, second order against the modal closed
 form, the error estimate against the true error, and deck mistakes."""

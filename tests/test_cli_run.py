@@ -39,7 +39,7 @@ def test_every_sample_deck_runs(deck, tmp_path):
         code, _, err = run("run", deck, "--out", out)
         assert code == 0, err
         names = (out / "time_history.csv").read_text().splitlines()[0].split(",")
-        space = names[3] == "u3_m"  # a body in space (README, Three dimensions)
+        space = names[3] == "u3_m"  # a body in space (docs/explanation/space.md)
         base = base_columns(SPACE) if space else BASE_COLUMNS
         assert names[:len(base)] == list(base)
         assert names[-4:] == list(ENERGY_COLUMNS)

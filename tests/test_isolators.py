@@ -1,4 +1,4 @@
-"""[[isolators]] (README, "Isolators"): a mount with an axial and shear behaviour as one entry with
+"""[[isolators]] (docs/reference/deck.md, "Isolators"): a mount with an axial and shear behaviour as one entry with
 local axes gives exactly the run of its elements written by hand, in space and in the plane; its
 default shear lines; every mistake in it is one line naming its key (exit 2)."""
 

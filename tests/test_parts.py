@@ -19,7 +19,8 @@ from rbhyst.model.system import assemble
 from rbhyst.solve.plan import Settings, simulate
 from conftest import SEED_MASS, SEED_VERTICES, seed_deck, square_linear_deck, write_deck
 
-# the README's cabinet: a uniform shell 0.8 m x 2.0 m and a dense unit 0.6 m x 0.4 m inside it
+# the documentation's cabinet (docs/reference/deck.md, Body): a uniform shell 0.8 m x 2.0 m and a dense
+# unit 0.6 m x 0.4 m inside it
 SHELL = [[0.0, 0.0], [0.8, 0.0], [0.8, 2.0], [0.0, 2.0]]
 UNIT = [[0.1, 0.2], [0.7, 0.2], [0.7, 0.6], [0.1, 0.6]]
 M_SHELL, M_UNIT = 300.0, 250.0

@@ -1,4 +1,4 @@
-"""The analyses built on runs, for a deck in space (README, Three dimensions): qualification in three
+"""The analyses built on runs, for a deck in space (docs/explanation/space.md): qualification in three
 axes (x1, x2 horizontal, x3 vertical), transmissibility along x1, x2 or x3, the study of six
 coordinates and sweeps whose motions carry x3. A prism extruded from a plane body reproduces the
 plane command's numbers for the in-plane quantities; a motion along x3 gives the vertical responses;

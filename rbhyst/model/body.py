@@ -1,6 +1,6 @@
 """The rigid body: its mass, mass centre G and polar inertia about G, and its outlines about G.
 
-Three forms (see README, "Body"): one uniform polygon (seed eqs. 1-4), several uniform
+Three forms (docs/reference/deck.md, "Body"): one uniform polygon (seed eqs. 1-4), several uniform
 polygons combined by the parallel-axis theorem, or the properties given directly with an
 outline. Downstream, every coordinate is relative to G.
 """
@@ -114,7 +114,7 @@ def body_from_deck(spec: dk.Body) -> tuple[Body, list[str]]:
 
 
 def body_summary(body: Body) -> dict:
-    """The ``body`` entry of summary.json (README, Outputs; a body in space: Three dimensions)."""
+    """The ``body`` entry of summary.json (docs/reference/outputs.md; a body in space: docs/explanation/space.md)."""
     if getattr(body, "dimensions", 2) == 3:
         from rbhyst.model.solid import solid_summary
 

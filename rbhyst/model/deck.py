@@ -164,7 +164,7 @@ class Body(_Model):
     #: J_x3 about the mass centre (kg m2) in the plane; in space the 3 x 3 tensor about it
     inertia: float | list[list[float]] | None = None
     #: the acceleration of gravity in the deck's frame (m/s2): the weight m g acts at G and the
-    #: run starts from the static equilibrium under it (see README, "Gravity preload")
+    #: run starts from the static equilibrium under it (see the documentation, "Gravity preload")
     gravity: Point | None = None
     #: false: a gravity of any magnitude (another planet, a centrifuge); true: |gravity| within
     #: GRAVITY_SPREAD of the standard 9.80665 m/s2 (or zero), else a mistake of units
@@ -562,15 +562,15 @@ class Analysis(_Model):
     dt: PosFloat
     duration: PosFloat | None = None
     #: the method, named: exactly it at dt; left out, rbhyst chooses the method and the compute
-    #: step that meet warn_error, with dt the output interval (see README, "Accuracy by default")
+    #: step that meet warn_error, with dt the output interval (see the documentation, "Accuracy by default")
     integrator: str | None = None
-    #: accuracy limit on the stiffest instantaneous mode: omega_max * h (see README)
+    #: accuracy limit on the stiffest instantaneous mode: omega_max * h (see the documentation, "Stiffness monitor")
     max_omega_dt: PosFloat = 0.5
     #: at most 2**max_substep_level substeps per step before the run stops
     max_substep_level: Annotated[int, Field(ge=0, le=20)] = 12
     #: the adaptive integrator's relative tolerance
     rtol: Annotated[float, Field(gt=1e-14, lt=1e-2)] = 1e-8
-    #: the accuracy asked for: rbhyst chooses how to meet it (see README, "Accuracy")
+    #: the accuracy asked for: rbhyst chooses how to meet it (see the documentation, "Get the accuracy you need")
     tolerance: Annotated[float, Field(gt=0, lt=1)] | None = None
     #: a run whose estimated error exceeds this warns
     warn_error: Annotated[float, Field(gt=0, lt=1)] = 0.01
@@ -617,7 +617,8 @@ Ratio = Annotated[float, Field(ge=0, lt=1)]
 
 
 class Spectra(_Model):
-    """Response spectra of the ground, of G and of every point (see README, "Outputs")."""
+    """Response spectra of the ground, of G and of every point (see the documentation, "Points of
+    interest and spectra")."""
 
     #: damping ratios of the oscillators (a number or a list)
     damping: Annotated[list[Ratio], Field(min_length=1)] = [0.05]
@@ -693,7 +694,7 @@ class ShakeTable(_Model):
 
 
 class Qualify(_Model):
-    """What ``rbhyst qualify`` holds the deck to (see README, "Qualification"): a required
+    """What ``rbhyst qualify`` holds the deck to (see the documentation, "Qualification"): a required
     response spectrum (a standard's, or files), the motions, and the limits."""
 
     standard: Literal["ac156", "ieee693"] | None = None

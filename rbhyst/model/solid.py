@@ -243,7 +243,7 @@ def solid_from_deck(spec: "dk.Body") -> tuple[Solid, list[str]]:
 
 
 def solid_summary(body: Solid) -> dict:
-    """The ``body`` entry of summary.json for a body in space (README, Three dimensions)."""
+    """The ``body`` entry of summary.json for a body in space (docs/explanation/space.md)."""
     out = {"form": body.form, "mass_kg": body.mass, "inertia_kgm2": body.inertia.tolist(),
            "mass_centre_m": body.mass_centre.tolist()}
     lam, vec = np.linalg.eigh(body.inertia)

@@ -19,7 +19,7 @@ if TYPE_CHECKING:  # pragma: no cover
     from rbhyst.solve.located import LocatedSpectra
     from rbhyst.model.settings import Settings
 
-#: relative energy balance error above which a run is flagged (see README)
+#: relative energy balance error above which a run is flagged (docs/explanation/integrators.md, "Energy balance")
 ENERGY_WARN = 0.01
 
 

@@ -7,7 +7,7 @@ error is the Runge-Kutta pair's: order 8 between events, so its error falls abou
 hundredfold per hundredfold of rtol (1.4e-4 at 1e-6, 3e-6 at 1e-8, 4e-8 at 1e-10 on the
 seed deck). Explicit and adaptive: no stability limit to watch, no numerical dissipation
 beyond the tolerance; its cost grows with the number of reversals (each is an event), where
-the fixed-step methods win (many elements, near-sharp yield: see README, "Accuracy").
+the fixed-step methods win (many elements, near-sharp yield: see docs/how-to/accuracy.md, "Which method").
 """
 
 from rbhyst.solve.integrators import Method
