@@ -607,27 +607,50 @@ def spectrum(
     units: Annotated[str, typer.Option(help="Units of the record's values: g, m/s2 or cm/s2 (held to what the "
                                             "file declares).")],
     dt: Annotated[Optional[float], typer.Option(help="Sample step [s] of a one-column record.")] = None,
-    damping: Annotated[str, typer.Option(help="Comma-separated damping ratios.")] = "0.05",
+    kind: Annotated[str, typer.Option(help="rs: response spectra against period (spectra.csv); srs: the shock "
+                                           "response spectrum against frequency (srs.csv, srs.png, pvss.png).")] = "rs",
+    damping: Annotated[Optional[str], typer.Option(help="Comma-separated damping ratios (--kind rs; default "
+                                                        "0.05).")] = None,
     periods: Annotated[Optional[str], typer.Option(
-        help="Comma-separated periods [s] (default: 100 log-spaced from 0.01 to 10 s).")] = None,
+        help="Comma-separated periods [s] (--kind rs; default: 100 log-spaced from 0.01 to 10 s).")] = None,
+    q: Annotated[Optional[str], typer.Option("--q", help="Comma-separated quality factors Q = 1 / (2 damping) "
+                                                         "(--kind srs; default 10).")] = None,
+    frequencies: Annotated[Optional[str], typer.Option(
+        help="F1..F2 [Hz] (--kind srs; default 1 Hz to the lesser of 10 kHz and a tenth of the sample rate).")] = None,
+    per_octave: Annotated[Optional[int], typer.Option(help="Frequencies an octave (--kind srs; default 12).")] = None,
     direction: Annotated[str, typer.Option(help="The direction the rows are labelled with (x1 or x2).")] = "x1",
     free_vibration: Annotated[bool, typer.Option(
         "--free-vibration/--no-free-vibration",
         help="Follow the record with rest until every oscillator has passed its peak.")] = True,
     out: Annotated[Optional[Path], typer.Option(
         "--out", help="Output folder (default: results/<record stem>-spectrum/ beside the record).")] = None,
-    plots: Annotated[bool, typer.Option("--plots/--no-plots", help="Write spectra.png.")] = True,
+    plots: Annotated[bool, typer.Option("--plots/--no-plots", help="Write spectra.png (srs.png, pvss.png).")] = True,
 ):
-    """Response spectra of a support acceleration record: spectra.csv and spectra.png."""
+    """Response spectra of a support acceleration record: spectra.csv and spectra.png, or with
+    --kind srs its shock response spectrum: srs.csv, srs.png and pvss.png."""
     from rbhyst.files.outdir import staged_directory
-    from rbhyst.results.writers import write_spectra_csv
-    from rbhyst.analyses.record_spectrum import record_spectrum
 
     with user_errors():
-        spectra = record_spectrum(record, units, dt=dt, dampings=_split_list(damping, "--damping", float),
+        if kind not in ("rs", "srs"):
+            raise InputError(f"--kind: {kind!r}: rs (response spectra against period) or srs (the shock response "
+                             "spectrum against frequency)")
+        asked = {"--damping": damping, "--periods": periods, "--q": q, "--frequencies": frequencies,
+                 "--per-octave": per_octave}
+        other = ("--q", "--frequencies", "--per-octave") if kind == "rs" else ("--damping", "--periods")
+        wrong = [f"{k}: not with --kind {kind}" for k in other if asked[k] is not None]
+        if kind == "srs" and not free_vibration:
+            wrong.append("--no-free-vibration: not with --kind srs (its residual spectrum is the free vibration)")
+        if wrong:
+            raise InputError(wrong)
+        target = out if out is not None else record.parent / "results" / f"{record.stem}-spectrum"
+        if kind == "srs":
+            return _shock_spectrum(record, units, dt, q, frequencies, per_octave, target, plots)
+        from rbhyst.results.writers import write_spectra_csv
+        from rbhyst.analyses.record_spectrum import record_spectrum
+
+        spectra = record_spectrum(record, units, dt=dt, dampings=_split_list(damping or "0.05", "--damping", float),
                                   periods=_split_list(periods, "--periods", float), direction=direction,
                                   free_vibration=free_vibration)
-        target = out if out is not None else record.parent / "results" / f"{record.stem}-spectrum"
         with staged_directory(target) as tmp:
             write_spectra_csv(spectra, tmp / "spectra.csv")
             if plots:
@@ -639,6 +662,43 @@ def spectrum(
         i = int(s.sa[:, j, 0].argmax())
         say(f"damping {zeta:g}: peak sa {s.sa[i, j, 0]:.4g} m/s2 at T = {s.periods[i]:.4g} s; "
             f"sd {s.sd[:, j, 0].max():.4g} m at most")
+    say(f"wrote {target}")
+
+
+def _frequency_range(text: str | None) -> tuple[float, float] | None:
+    """--frequencies F1..F2 as two numbers (Hz)."""
+    if text is None:
+        return None
+    parts = text.split("..")
+    try:
+        lo, hi = (float(p) for p in parts)
+    except ValueError:
+        raise InputError(f"--frequencies: {text!r}: F1..F2, two frequencies in Hz (e.g. 10..2000)") from None
+    return lo, hi
+
+
+def _shock_spectrum(record: Path, units: str, dt, q, frequencies, per_octave, target: Path, plots: bool) -> None:
+    """``rbhyst spectrum --kind srs``: srs.csv, srs.png and pvss.png."""
+    from rbhyst.analyses.record_spectrum import record_shock_spectrum
+    from rbhyst.files.outdir import staged_directory
+    from rbhyst.results.writers import write_srs_csv
+
+    srs = record_shock_spectrum(record, units, dt=dt, qs=_split_list(q or "10", "--q", float),
+                                frequencies=_frequency_range(frequencies),
+                                per_octave=12 if per_octave is None else per_octave)
+    with staged_directory(target) as tmp:
+        write_srs_csv(srs, tmp / "srs.csv")
+        if plots:
+            from rbhyst.report.shock_spectra import plot_pvss, plot_srs
+
+            plot_srs(srs, tmp / "srs.png", title=record.name)
+            plot_pvss(srs, tmp / "pvss.png", title=record.name)
+    f = srs.frequencies_hz
+    for j, qj in enumerate(srs.qs):
+        i = int(srs.maximax[:, j].argmax())
+        k = int(srs.pv[:, j].argmax())
+        say(f"Q {qj:g}: maximax {srs.maximax[i, j] / 9.80665:.4g} g at {f[i]:.4g} Hz; pseudo-velocity "
+            f"{srs.pv[k, j]:.4g} m/s at most ({f[k]:.4g} Hz); {len(f)} frequencies {f[0]:.4g}-{f[-1]:.4g} Hz")
     say(f"wrote {target}")
 
 
@@ -829,6 +889,14 @@ def make_motion(
                 from rbhyst.report.qualification import plot_trs
 
                 plot_trs(made, spectra, tmp / "trs.png")
+    for line in _made_lines(made):
+        say(line)
+    say(f"wrote {out}")
+
+
+def _made_lines(made) -> list[str]:
+    """What make-motion says of each motion: its TRS, peak, strong motion, table and coherence."""
+    lines = []
     for m in made:
         for axis, r in m.records.items():
             least = "" if r.check.peak_min is None else f" (at least {r.check.peak_min / 9.80665:.3g} g)"
@@ -837,16 +905,16 @@ def make_motion(
                 strong += (f"; asks the table {r.reached['displacement']:.3g} m peak to peak, "
                            f"{r.reached['velocity']:.3g} m/s, {r.reached['acceleration']:.3g} g (high-pass from "
                            f"{r.high_pass:.3g} Hz)")
-            say(f"motion {m.number} {axis}: TRS from {r.check.said()} at {len(r.check.fine_frequency)} frequencies "
-                f"({r.iterations} iterations); peak {float(abs(r.acc_g).max()):.3g} g{least}; strong motion "
-                f"{r.strong:.3g} s{strong}")
+            lines.append(f"motion {m.number} {axis}: TRS from {r.check.said()} at {len(r.check.fine_frequency)} "
+                         f"frequencies ({r.iterations} iterations); peak {float(abs(r.acc_g).max()):.3g} g{least}; "
+                         f"strong motion {r.strong:.3g} s{strong}")
         coherence = m.coherences()
         for pair, c in m.correlations.items():
             a, b = pair.split("_")
-            say(f"motion {m.number}: correlation of {a} and {b} {c:+.3f}; coherence {coherence[pair]['mean']:.3f} "
-                f"on average over {coherence[pair]['band_hz'][0]:.3g}-{coherence[pair]['band_hz'][1]:.3g} Hz "
-                f"(largest {coherence[pair]['max']:.3f})")
-    say(f"wrote {out}")
+            lines.append(f"motion {m.number}: correlation of {a} and {b} {c:+.3f}; coherence "
+                         f"{coherence[pair]['mean']:.3f} on average over {coherence[pair]['band_hz'][0]:.3g}-"
+                         f"{coherence[pair]['band_hz'][1]:.3g} Hz (largest {coherence[pair]['max']:.3f})")
+    return lines
 
 
 #: the first line of every record make-motion writes
