@@ -451,18 +451,36 @@ class Sine(_Model, Generic[U]):
     ramp_cycles: Annotated[float, Field(ge=0)] = 0.0
 
 
-PULSES = ("half-sine", "haversine", "terminal-peak-sawtooth", "triangle")
+PULSES = ("half-sine", "haversine", "terminal-peak-sawtooth", "triangle", "trapezoid")
 
 
 class Pulse(_Model, Generic[U]):
     """A shock pulse of peak ``amplitude`` lasting ``duration`` s from ``start`` (MIL-DTL-901,
-    MIL-STD-810 shapes): half-sine, haversine, terminal-peak sawtooth, symmetric triangle."""
+    MIL-STD-810 shapes): half-sine, haversine, terminal-peak sawtooth, symmetric triangle,
+    trapezoid (rising and falling over ``rise`` s). ``compensation = "pre-post"``: half-sine
+    pre- and post-pulses of the opposite sign, peaks ``compensation_ratio`` of the main one, that
+    bring the table's velocity and displacement back to zero (rbhyst.model.shock_pulses); the
+    pre-pulse then starts at ``start`` and the main pulse follows it."""
 
-    type: Literal["half-sine", "haversine", "terminal-peak-sawtooth", "triangle"]
+    type: Literal["half-sine", "haversine", "terminal-peak-sawtooth", "triangle", "trapezoid"]
     amplitude: float
     units: U
     duration: PosFloat
     start: Annotated[float, Field(ge=0)] = 0.0
+    #: s, a trapezoid's rise and fall (default a tenth of its duration)
+    rise: PosFloat | None = None
+    compensation: Literal["none", "pre-post"] = "none"
+    compensation_ratio: Annotated[float, Field(gt=0, le=0.2)] = 0.1
+
+    @model_validator(mode="after")
+    def _rise(self):
+        if self.rise is not None and self.type != "trapezoid":
+            raise ValueError(f"rise: only a trapezoid has one (this pulse is a {self.type})")
+        if self.rise is not None and not self.rise < 0.5 * self.duration:
+            raise ValueError(f"rise: {self.rise:g} s must be below half the duration ({0.5 * self.duration:g} s)")
+        if "compensation_ratio" in self.model_fields_set and self.compensation == "none":
+            raise ValueError("compensation_ratio: only with compensation = \"pre-post\"")
+        return self
 
 
 PSD_UNITS = Literal["g2/Hz", "(m/s2)2/Hz"]
