@@ -1000,6 +1000,64 @@ def qualify(
 EXIT_VERDICT = 1
 
 
+@app.command(cls=Command)
+def shock(
+    deck: Annotated[Path, typer.Argument(help="TOML or YAML deck, with a shock section or the options below.")],
+    pulse: Annotated[Optional[str], typer.Option(help="A named pulse: 810h-functional-flight, 810h-functional-ground, "
+                                                      "810h-crash-flight, 810h-crash-ground, 810c-basic-design, "
+                                                      "202-condition-a (README, Shock).")] = None,
+    record: Annotated[Optional[Path], typer.Option(help="A shock record instead of a pulse (time,value table, "
+                                                         "starting at 0 s).")] = None,
+    units: Annotated[Optional[str], typer.Option(help="Units of --record's values: g, m/s2 or cm/s2.")] = None,
+    compensation: Annotated[Optional[str], typer.Option(help="A named pulse with pre- and post-pulses (pre-post) "
+                                                             "or bare (none, the default).")] = None,
+    shocks: Annotated[Optional[int], typer.Option(help="Shocks in each direction of each axis, one after the other "
+                                                       "(default 3, MIL-STD-810H 516.8 Procedure I).")] = None,
+    axes: Annotated[Optional[str], typer.Option(help="Comma-separated axes to shock (default: every axis of the "
+                                                     "deck).")] = None,
+    integrator: Annotated[Optional[str], typer.Option(help="Override analysis.integrator.")] = None,
+    dt: Annotated[Optional[float], typer.Option(help="Override analysis.dt, in s.")] = None,
+    tolerance: Annotated[Optional[float], typer.Option(help="The accuracy asked for (see rbhyst run).")] = None,
+    out: Annotated[Optional[Path], typer.Option(
+        "--out", help="Output folder (default: the deck's output folder + '-shock').")] = None,
+    plots: Annotated[bool, typer.Option("--plots/--no-plots", help="Write pulse.png, srs.png and pvss.png.")] = True,
+):
+    """The verdict of a deck under shock along each direction of each axis: shock.json.
+
+    Exit 0: it passes; 1: it does not (each failed criterion said); 2: a mistake in the deck or
+    options; 3: a run that fails.
+    """
+    from rbhyst.analyses.shock.verdict import output_files, request, verdict_lines
+    from rbhyst.analyses.shock.verdict import shock as judge
+    from rbhyst.files.outdir import check_free, staged_directory
+    from rbhyst.model.deck import ANALYSIS_SECTIONS, load_deck
+
+    with user_errors():
+        d = load_deck(deck, need=ANALYSIS_SECTIONS)
+        req = request(d, {"pulse": pulse, "record": record, "units": units, "compensation": compensation,
+                          "shocks": shocks, "axes": _split_list(axes, "--axes")})
+        target = out if out is not None else _sibling_dir(d, deck, "-shock")
+        check_free(target, output_files(req))
+        with staged_directory(target) as tmp:
+            v, drive = judge(d, req, tmp, integrator=integrator, dt=dt, tolerance=tolerance, say=say)
+            if plots and d.output.plots:
+                from rbhyst.analyses.shock.verdict import drive_srs
+                from rbhyst.report.shock_spectra import plot_pvss, plot_srs
+
+                if drive.pulse is not None:
+                    from rbhyst.report.shock_spectra import plot_pulse
+
+                    plot_pulse(drive.pulse, tmp / "pulse.png", title=drive.source)
+                srs = drive_srs(drive)
+                plot_srs(srs, tmp / "srs.png", title="the drive")
+                plot_pvss(srs, tmp / "pvss.png", title="the drive")
+    for line in verdict_lines(v):
+        say(line)
+    say(f"wrote {target}")
+    if not v.passed:
+        raise typer.Exit(EXIT_VERDICT)
+
+
 def output_dir(deck, deck_path: Path) -> Path:
     """output.directory relative to the deck's folder, default results/<deck stem>/."""
     if deck.output.directory is not None:

@@ -747,6 +747,34 @@ class Qualify(_Model):
         return self
 
 
+class ShockTest(_Model):
+    """What ``rbhyst shock`` holds the deck to (see README, "Shock"): the shock (a named pulse of
+    rbhyst.model.shock_pulses.PRESETS, a pulse of its own, or a record), how many along each
+    direction of each axis, and the limits (as for ``rbhyst qualify``; strokes from the elements)."""
+
+    pulse: str | Pulse[AccelUnits] | None = None
+    record: Record[AccelUnits] | None = None
+    #: a named pulse played with pre- and post-pulses ("pre-post") or bare ("none", the default)
+    compensation: Literal["none", "pre-post"] | None = None
+    #: the axes shocked (default: every axis of the deck), each in both directions
+    axes: Annotated[list[Literal["x1", "x2", "x3"]], Field(min_length=1)] | None = None
+    #: shocks in each direction of each axis, one after the other in one run (MIL-STD-810H 516.8
+    #: Procedure I: three)
+    shocks: Annotated[int, Field(ge=1, le=10)] = 3
+    acceleration_limit_g: dict[str, PosFloat | Annotated[list[PosFloat], Field(min_length=2, max_length=3)]] | None \
+        = None
+    force_capacity_N: PosFloat | dict[str, PosFloat] | None = None
+
+    @model_validator(mode="after")
+    def _one_shock(self):
+        if self.pulse is not None and self.record is not None:
+            raise _key_problems([("record", "not with shock.pulse: give a pulse or a record")])
+        if self.compensation is not None and not isinstance(self.pulse, str):
+            raise _key_problems([("compensation", "only with a named pulse (a pulse of its own says its own "
+                                                  "compensation)")])
+        return self
+
+
 class Deck(_Model):
     title: str | None = None
     body: Body | None = None
@@ -762,6 +790,7 @@ class Deck(_Model):
     output: Output = Output()
     loops: Loops | None = None
     qualify: Qualify | None = None
+    shock: ShockTest | None = None
     #: the file the deck came from (None for one built in code): relative paths resolve beside it
     _source: Path | None = PrivateAttr(default=None)
 
@@ -867,7 +896,8 @@ KEY_UNITS: dict[tuple[str, ...], str] = {
     **{("isolators", "stroke", name): "m" for name in ("axial", "shear", "shear1", "shear2")},
     **{(*group, "*", name): unit for group in (("excitation", "support"), ("excitation", "force"))
        for name, unit in (("amplitude", "signal"), ("scale", ""), ("frequency_hz", "Hz"), ("phase_deg", "°"),
-                          ("start", "s"), ("duration", "s"), ("dt", "s"), ("cycles", ""), ("ramp_cycles", ""))},
+                          ("start", "s"), ("duration", "s"), ("dt", "s"), ("cycles", ""), ("ramp_cycles", ""),
+                          ("rise", "s"), ("compensation_ratio", ""))},
     ("excitation", "force", "point"): "m",
     ("analysis", "dt"): "s", ("analysis", "duration"): "s", ("analysis", "max_omega_dt"): "",
     ("analysis", "max_substep_level"): "", ("analysis", "rtol"): "", ("analysis", "tolerance"): "",
@@ -881,6 +911,11 @@ KEY_UNITS: dict[tuple[str, ...], str] = {
     ("qualify", "motions"): "", ("qualify", "seed"): "", ("qualify", "duration"): "s", ("qualify", "motion_dt"): "s",
     ("qualify", "acceleration_limit_g", "*"): "g", ("qualify", "force_capacity_N"): "N",
     ("qualify", "force_capacity_N", "*"): "N",
+    ("shock", "shocks"): "", ("shock", "acceleration_limit_g", "*"): "g", ("shock", "force_capacity_N"): "N",
+    ("shock", "force_capacity_N", "*"): "N",
+    **{("shock", "pulse", name): unit for name, unit in (("amplitude", "signal"), ("duration", "s"), ("start", "s"),
+                                                          ("rise", "s"), ("compensation_ratio", ""))},
+    ("shock", "record", "scale"): "", ("shock", "record", "dt"): "s",
 }
 #: units as written in a deck, as an axis shows them
 _SHOWN_UNITS = {"m/s2": "m/s²", "cm/s2": "cm/s²"}

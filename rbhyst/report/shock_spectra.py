@@ -11,6 +11,7 @@ Gaberson's and Morse's work on the stress a pseudo-velocity can cause.
 from __future__ import annotations
 
 import math
+import textwrap
 from pathlib import Path
 
 import numpy as np
@@ -104,3 +105,42 @@ def _tripartite_grid(ax, lo_f: float, hi_f: float, lo_v: float, hi_v: float) -> 
                 text = f"{plain_number(value)} m" if kind == "D" else f"{plain_number(value)} g"
                 ax.text(f[k], pv[k], text, fontsize=6, color="0.45", rotation=0,
                         ha="right" if kind == "D" else "left", va="top" if kind == "D" else "bottom", zorder=2)
+
+
+@styled
+def plot_pulse(pulse, path: Path, title: str = ""):
+    """A classical pulse as played (rbhyst.model.shock_pulses.ClassicalPulse): its acceleration
+    with the nominal main pulse and the standard's band, and the table's velocity and
+    displacement (returns the figure, saved to ``path``)."""
+    from rbhyst.model.shock_pulses import PULSE_TOLERANCE, table_motion
+
+    s = pulse.series
+    t = s.times
+    a = np.asarray(s.values, float)
+    v, x = table_motion(a, s.dt)
+    peak = abs(pulse.amplitude)
+    fig, axes = subplots(3, 1, figsize=(6.8, 7.0), sharex=True)
+    ms = 1e3 * t
+    ax = axes[0]
+    inside = (t >= pulse.main_start) & (t <= pulse.main_end)
+    band, outside = PULSE_TOLERANCE["band"] * peak / G_STANDARD, PULSE_TOLERANCE["outside"] * peak / G_STANDARD
+    nominal = pulse.nominal(t) / G_STANDARD
+    ax.fill_between(ms, np.where(inside, nominal - band, -outside), np.where(inside, nominal + band, outside),
+                    color="C2", alpha=0.18, lw=0, label=f"tolerance band (±{PULSE_TOLERANCE['band']:g} A)")
+    ax.plot(ms, nominal, color="0.3", lw=1.0, ls="--", label="nominal pulse")
+    ax.plot(ms, a / G_STANDARD, color="C0", lw=1.3, label="as played")
+    ax.set_ylabel("acceleration [g]")
+    ax.legend(fontsize=7, loc="best")
+    axes[1].plot(ms, v, color="C1", lw=1.2)
+    axes[1].set_ylabel("table velocity [m/s]")
+    axes[2].plot(ms, 1e3 * x, color="C3", lw=1.2)
+    axes[2].set_ylabel("table displacement [mm]")
+    axes[2].set_xlabel("time [ms]")
+    for ax in axes:
+        ax.axhline(0.0, color="0.5", lw=0.6)
+    end = f"ends at {v[-1]:.2g} m/s, {1e3 * x[-1]:.2g} mm"
+    heading = textwrap.fill(title, 90) + "\n" if title else ""
+    axes[0].set_title(f"{heading}{pulse.kind}, {peak / G_STANDARD:.4g} g, {1e3 * pulse.duration:.4g} ms; the table "
+                      f"{end}", fontsize=9)
+    save(fig, path)
+    return fig
