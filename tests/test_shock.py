@@ -91,6 +91,7 @@ def test_a_limit_exceeded_fails_and_repeated_shocks_of_a_linear_body_agree(tmp_p
     ({}, ["--axes", "x3"], "--axes: 'x3': an axis of the deck (x1, x2)"),
     ({}, ["--record", "r.csv", "--pulse", "810c-basic-design"], "--record: not with --pulse"),
     ({}, ["--record", "r.csv"], "--units: the units of --record's values"),
+    ({}, ["--record", "r.csv", "--units", "g", "--compensation", "pre-post"], "--compensation: only with a named"),
     ({"acceleration_limit_g": {"nowhere": 3.0}}, [], "shock.acceleration_limit_g.nowhere: no point"),
     ({"pulse": {"type": "half-sine", "amplitude": 10, "units": "g", "duration": 0.01, "start": 0.1}}, [],
      "shock.pulse.start: a shock test's pulse starts at 0 s"),

@@ -78,6 +78,9 @@ def request(deck, cli: dict) -> ShockRequest:
     compensation = cli.get("compensation", own.compensation if own is not None else None)
     if compensation is not None and compensation not in ("none", "pre-post"):
         problems.append(f"{key['compensation']}: {compensation!r}: none or pre-post")
+    if "compensation" in cli and name is None:
+        problems.append("--compensation: only with a named pulse (--pulse, or shock.pulse naming one): a record is "
+                        "played as it is, a pulse of the deck's own says its own compensation")
     if "units" in cli and "record" not in cli:
         problems.append("--units: goes with --record (the units of its values)")
     if name is not None:
