@@ -635,27 +635,50 @@ def spectrum(
     units: Annotated[str, typer.Option(help="Units of the record's values: g, m/s2 or cm/s2 (held to what the "
                                             "file declares).")],
     dt: Annotated[Optional[float], typer.Option(help="Sample step [s] of a one-column record.")] = None,
-    damping: Annotated[str, typer.Option(help="Comma-separated damping ratios.")] = "0.05",
+    kind: Annotated[str, typer.Option(help="rs: response spectra against period (spectra.csv); srs: the shock "
+                                           "response spectrum against frequency (srs.csv, srs.png, pvss.png).")] = "rs",
+    damping: Annotated[Optional[str], typer.Option(help="Comma-separated damping ratios (--kind rs; default "
+                                                        "0.05).")] = None,
     periods: Annotated[Optional[str], typer.Option(
-        help="Comma-separated periods [s] (default: 100 log-spaced from 0.01 to 10 s).")] = None,
+        help="Comma-separated periods [s] (--kind rs; default: 100 log-spaced from 0.01 to 10 s).")] = None,
+    q: Annotated[Optional[str], typer.Option("--q", help="Comma-separated quality factors Q = 1 / (2 damping) "
+                                                         "(--kind srs; default 10).")] = None,
+    frequencies: Annotated[Optional[str], typer.Option(
+        help="F1..F2 [Hz] (--kind srs; default 1 Hz to the lesser of 10 kHz and a tenth of the sample rate).")] = None,
+    per_octave: Annotated[Optional[int], typer.Option(help="Frequencies an octave (--kind srs; default 12).")] = None,
     direction: Annotated[str, typer.Option(help="The direction the rows are labelled with (x1 or x2).")] = "x1",
     free_vibration: Annotated[bool, typer.Option(
         "--free-vibration/--no-free-vibration",
         help="Follow the record with rest until every oscillator has passed its peak.")] = True,
     out: Annotated[Optional[Path], typer.Option(
         "--out", help="Output folder (default: results/<record stem>-spectrum/ beside the record).")] = None,
-    plots: Annotated[bool, typer.Option("--plots/--no-plots", help="Write spectra.png.")] = True,
+    plots: Annotated[bool, typer.Option("--plots/--no-plots", help="Write spectra.png (srs.png, pvss.png).")] = True,
 ):
-    """Response spectra of a support acceleration record: spectra.csv and spectra.png."""
+    """Response spectra of a support acceleration record: spectra.csv and spectra.png, or with
+    --kind srs its shock response spectrum: srs.csv, srs.png and pvss.png."""
     from rbhyst.files.outdir import staged_directory
-    from rbhyst.results.writers import write_spectra_csv
-    from rbhyst.analyses.record_spectrum import record_spectrum
 
     with user_errors():
-        spectra = record_spectrum(record, units, dt=dt, dampings=_split_list(damping, "--damping", float),
+        if kind not in ("rs", "srs"):
+            raise InputError(f"--kind: {kind!r}: rs (response spectra against period) or srs (the shock response "
+                             "spectrum against frequency)")
+        asked = {"--damping": damping, "--periods": periods, "--q": q, "--frequencies": frequencies,
+                 "--per-octave": per_octave}
+        other = ("--q", "--frequencies", "--per-octave") if kind == "rs" else ("--damping", "--periods")
+        wrong = [f"{k}: not with --kind {kind}" for k in other if asked[k] is not None]
+        if kind == "srs" and not free_vibration:
+            wrong.append("--no-free-vibration: not with --kind srs (its residual spectrum is the free vibration)")
+        if wrong:
+            raise InputError(wrong)
+        target = out if out is not None else record.parent / "results" / f"{record.stem}-spectrum"
+        if kind == "srs":
+            return _shock_spectrum(record, units, dt, q, frequencies, per_octave, target, plots)
+        from rbhyst.results.writers import write_spectra_csv
+        from rbhyst.analyses.record_spectrum import record_spectrum
+
+        spectra = record_spectrum(record, units, dt=dt, dampings=_split_list(damping or "0.05", "--damping", float),
                                   periods=_split_list(periods, "--periods", float), direction=direction,
                                   free_vibration=free_vibration)
-        target = out if out is not None else record.parent / "results" / f"{record.stem}-spectrum"
         say_replaced(target, "spectrum")
         with staged_directory(target) as tmp:
             write_spectra_csv(spectra, tmp / "spectra.csv")
@@ -668,6 +691,43 @@ def spectrum(
         i = int(s.sa[:, j, 0].argmax())
         say(f"damping {zeta:g}: peak sa {s.sa[i, j, 0]:.4g} m/s2 at T = {s.periods[i]:.4g} s; "
             f"sd {s.sd[:, j, 0].max():.4g} m at most")
+    say(f"wrote {target}")
+
+
+def _frequency_range(text: str | None) -> tuple[float, float] | None:
+    """--frequencies F1..F2 as two numbers (Hz)."""
+    if text is None:
+        return None
+    parts = text.split("..")
+    try:
+        lo, hi = (float(p) for p in parts)
+    except ValueError:
+        raise InputError(f"--frequencies: {text!r}: F1..F2, two frequencies in Hz (e.g. 10..2000)") from None
+    return lo, hi
+
+
+def _shock_spectrum(record: Path, units: str, dt, q, frequencies, per_octave, target: Path, plots: bool) -> None:
+    """``rbhyst spectrum --kind srs``: srs.csv, srs.png and pvss.png."""
+    from rbhyst.analyses.record_spectrum import record_shock_spectrum
+    from rbhyst.files.outdir import staged_directory
+    from rbhyst.results.writers import write_srs_csv
+
+    srs = record_shock_spectrum(record, units, dt=dt, qs=_split_list(q or "10", "--q", float),
+                                frequencies=_frequency_range(frequencies),
+                                per_octave=12 if per_octave is None else per_octave)
+    with staged_directory(target) as tmp:
+        write_srs_csv(srs, tmp / "srs.csv")
+        if plots:
+            from rbhyst.report.shock_spectra import plot_pvss, plot_srs
+
+            plot_srs(srs, tmp / "srs.png", title=record.name)
+            plot_pvss(srs, tmp / "pvss.png", title=record.name)
+    f = srs.frequencies_hz
+    for j, qj in enumerate(srs.qs):
+        i = int(srs.maximax[:, j].argmax())
+        k = int(srs.pv[:, j].argmax())
+        say(f"Q {qj:g}: maximax {srs.maximax[i, j] / 9.80665:.4g} g at {f[i]:.4g} Hz; pseudo-velocity "
+            f"{srs.pv[k, j]:.4g} m/s at most ({f[k]:.4g} Hz); {len(f)} frequencies {f[0]:.4g}-{f[-1]:.4g} Hz")
     say(f"wrote {target}")
 
 
@@ -998,6 +1058,64 @@ def schema(
         except OSError as err:
             raise InputError(f"--out {out}: cannot write it ({err.strerror or err})") from None
     say(f"wrote {out}")
+
+
+@app.command(cls=Command)
+def shock(
+    deck: Annotated[Path, typer.Argument(help="TOML or YAML deck, with a shock section or the options below.")],
+    pulse: Annotated[Optional[str], typer.Option(help="A named pulse: 810h-functional-flight, 810h-functional-ground, "
+                                                      "810h-crash-flight, 810h-crash-ground, 810c-basic-design, "
+                                                      "202-condition-a (README, Shock).")] = None,
+    record: Annotated[Optional[Path], typer.Option(help="A shock record instead of a pulse (time,value table, "
+                                                         "starting at 0 s).")] = None,
+    units: Annotated[Optional[str], typer.Option(help="Units of --record's values: g, m/s2 or cm/s2.")] = None,
+    compensation: Annotated[Optional[str], typer.Option(help="A named pulse with pre- and post-pulses (pre-post) "
+                                                             "or bare (none, the default).")] = None,
+    shocks: Annotated[Optional[int], typer.Option(help="Shocks in each direction of each axis, one after the other "
+                                                       "(default 3, MIL-STD-810H 516.8 Procedure I).")] = None,
+    axes: Annotated[Optional[str], typer.Option(help="Comma-separated axes to shock (default: every axis of the "
+                                                     "deck).")] = None,
+    integrator: Annotated[Optional[str], typer.Option(help="Override analysis.integrator.")] = None,
+    dt: Annotated[Optional[float], typer.Option(help="Override analysis.dt, in s.")] = None,
+    tolerance: Annotated[Optional[float], typer.Option(help="The accuracy asked for (see rbhyst run).")] = None,
+    out: Annotated[Optional[Path], typer.Option(
+        "--out", help="Output folder (default: the deck's output folder + '-shock').")] = None,
+    plots: Annotated[bool, typer.Option("--plots/--no-plots", help="Write pulse.png, srs.png and pvss.png.")] = True,
+):
+    """The verdict of a deck under shock along each direction of each axis: shock.json.
+
+    Exit 0: it passes; 1: it does not (each failed criterion said); 2: a mistake in the deck or
+    options; 3: a run that fails.
+    """
+    from rbhyst.analyses.shock.verdict import output_files, request, verdict_lines
+    from rbhyst.analyses.shock.verdict import shock as judge
+    from rbhyst.files.outdir import check_free, staged_directory
+    from rbhyst.model.deck import ANALYSIS_SECTIONS, load_deck
+
+    with user_errors():
+        d = load_deck(deck, need=ANALYSIS_SECTIONS)
+        req = request(d, {"pulse": pulse, "record": record, "units": units, "compensation": compensation,
+                          "shocks": shocks, "axes": _split_list(axes, "--axes")})
+        target = out if out is not None else _sibling_dir(d, deck, "-shock")
+        check_free(target, output_files(req))
+        with staged_directory(target) as tmp:
+            v, drive = judge(d, req, tmp, integrator=integrator, dt=dt, tolerance=tolerance, say=say)
+            if plots and d.output.plots:
+                from rbhyst.analyses.shock.verdict import drive_srs
+                from rbhyst.report.shock_spectra import plot_pvss, plot_srs
+
+                if drive.pulse is not None:
+                    from rbhyst.report.shock_spectra import plot_pulse
+
+                    plot_pulse(drive.pulse, tmp / "pulse.png", title=drive.source)
+                srs = drive_srs(drive)
+                plot_srs(srs, tmp / "srs.png", title="the drive")
+                plot_pvss(srs, tmp / "pvss.png", title="the drive")
+    for line in verdict_lines(v):
+        say(line)
+    say(f"wrote {target}")
+    if not v.passed:
+        raise typer.Exit(EXIT_VERDICT)
 
 
 def output_dir(deck, deck_path: Path) -> Path:

@@ -42,8 +42,6 @@ def record_spectrum(path: Path, units: str, dt: float | None = None, dampings=(0
     the record's samples only.
     """
     from rbhyst.model.deck import ACCEL_UNITS
-    from rbhyst.files.units import check_declared
-    from rbhyst.model.records import read_record
 
     problems = check_oscillators(list(dampings), None if periods is None else list(periods))
     if units not in ACCEL_UNITS:
@@ -55,6 +53,21 @@ def record_spectrum(path: Path, units: str, dt: float | None = None, dampings=(0
         problems.append(f"--direction: {direction!r}: x1 or x2")
     if problems:
         raise InputError(problems)
+    rec, acc = _read(path, units, dt)
+    periods = np.sort(np.asarray(periods, float)) if periods is not None else default_periods()
+    sink = SpectraSink([(GROUND, direction)], dampings, periods, rec.series.dt)
+    sink.update(acc[:, None])
+    if free_vibration:
+        sink.update(np.zeros((rest_samples(periods, dampings, rec.series.dt), 1)))
+    return dataclasses.replace(sink.result(), record_dt=((direction, float(rec.series.dt)),))
+
+
+def _read(path: Path, units: str, dt: float | None):
+    """The record and its samples in m/s2, the readers' words about the deck said of the options."""
+    from rbhyst.files.units import check_declared
+    from rbhyst.model.deck import ACCEL_UNITS
+    from rbhyst.model.records import read_record
+
     try:
         rec = read_record(Path(path), dt)
         check_declared(rec.declared, units)
@@ -65,10 +78,45 @@ def record_spectrum(path: Path, units: str, dt: float | None = None, dampings=(0
                 p = p.replace(deck_words, option_words)
             lines.append(p)
         raise InputError(lines) from None
-    acc = rec.series.values * ACCEL_UNITS[units]
-    periods = np.sort(np.asarray(periods, float)) if periods is not None else default_periods()
-    sink = SpectraSink([(GROUND, direction)], dampings, periods, rec.series.dt)
-    sink.update(acc[:, None])
-    if free_vibration:
-        sink.update(np.zeros((rest_samples(periods, dampings, rec.series.dt), 1)))
-    return dataclasses.replace(sink.result(), record_dt=((direction, float(rec.series.dt)),))
+    return rec, rec.series.values * ACCEL_UNITS[units]
+
+
+#: the highest default frequency of a shock spectrum, Hz, and the least samples a period
+SRS_TOP_HZ, SRS_SAMPLES_PER_PERIOD = 10_000.0, 10
+
+
+def default_srs_frequencies(dt: float, per_octave: int = 12) -> np.ndarray:
+    """1 Hz to the lesser of 10 kHz and a tenth of the sample rate (ten samples a period of the
+    highest: above it the record's content is shaped by its sampling), ``per_octave`` an octave."""
+    from rbhyst.solve.shock_spectra import octave_frequencies
+
+    return octave_frequencies(1.0, max(min(SRS_TOP_HZ, 1.0 / (SRS_SAMPLES_PER_PERIOD * dt)), 2.0), per_octave)
+
+
+def record_shock_spectrum(path: Path, units: str, dt: float | None = None, qs=(10.0,),
+                          frequencies: tuple[float, float] | None = None, per_octave: int = 12):
+    """The shock response spectrum (rbhyst.solve.shock_spectra) of the record at ``path`` in
+    ``units``: primary over its samples, residual over the free vibration after them; damping
+    1 / (2 Q) for every Q; ``frequencies`` (lowest, highest) Hz at ``per_octave`` an octave
+    (default: default_srs_frequencies)."""
+    from rbhyst.model.deck import ACCEL_UNITS
+    from rbhyst.solve.shock_spectra import octave_frequencies, shock_spectrum
+
+    problems = [f"--q: {q:g} must be above 0.5 (an underdamped oscillator, damping 1 / (2 Q) below 1)"
+                for q in qs if not (q > 0.5)]
+    if len(set(qs)) != len(qs):
+        problems.append("--q: each Q once")
+    if not qs:
+        problems.append("--q: at least one Q")
+    if units not in ACCEL_UNITS:
+        problems.append(f"--units: {units!r} is not an acceleration unit rbhyst knows; "
+                        f"choose one of {', '.join(ACCEL_UNITS)}")
+    if dt is not None and not (dt > 0 and math.isfinite(dt)):
+        problems.append(f"--dt: {dt:g} s must be positive")
+    if problems:
+        raise InputError(problems)
+    rec, acc = _read(path, units, dt)
+    step = float(rec.series.dt)
+    f = (default_srs_frequencies(step, per_octave) if frequencies is None
+         else octave_frequencies(frequencies[0], frequencies[1], per_octave))
+    return shock_spectrum(acc, step, f, [1.0 / (2.0 * q) if math.isfinite(q) else 0.0 for q in qs])

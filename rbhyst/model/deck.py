@@ -451,18 +451,36 @@ class Sine(_Model, Generic[U]):
     ramp_cycles: Annotated[float, Field(ge=0)] = 0.0
 
 
-PULSES = ("half-sine", "haversine", "terminal-peak-sawtooth", "triangle")
+PULSES = ("half-sine", "haversine", "terminal-peak-sawtooth", "triangle", "trapezoid")
 
 
 class Pulse(_Model, Generic[U]):
     """A shock pulse of peak ``amplitude`` lasting ``duration`` s from ``start`` (MIL-DTL-901,
-    MIL-STD-810 shapes): half-sine, haversine, terminal-peak sawtooth, symmetric triangle."""
+    MIL-STD-810 shapes): half-sine, haversine, terminal-peak sawtooth, symmetric triangle,
+    trapezoid (rising and falling over ``rise`` s). ``compensation = "pre-post"``: half-sine
+    pre- and post-pulses of the opposite sign, peaks ``compensation_ratio`` of the main one, that
+    bring the table's velocity and displacement back to zero (rbhyst.model.shock_pulses); the
+    pre-pulse then starts at ``start`` and the main pulse follows it."""
 
-    type: Literal["half-sine", "haversine", "terminal-peak-sawtooth", "triangle"]
+    type: Literal["half-sine", "haversine", "terminal-peak-sawtooth", "triangle", "trapezoid"]
     amplitude: float
     units: U
     duration: PosFloat
     start: Annotated[float, Field(ge=0)] = 0.0
+    #: s, a trapezoid's rise and fall (default a tenth of its duration)
+    rise: PosFloat | None = None
+    compensation: Literal["none", "pre-post"] = "none"
+    compensation_ratio: Annotated[float, Field(gt=0, le=0.2)] = 0.1
+
+    @model_validator(mode="after")
+    def _rise(self):
+        if self.rise is not None and self.type != "trapezoid":
+            raise ValueError(f"rise: only a trapezoid has one (this pulse is a {self.type})")
+        if self.rise is not None and not self.rise < 0.5 * self.duration:
+            raise ValueError(f"rise: {self.rise:g} s must be below half the duration ({0.5 * self.duration:g} s)")
+        if "compensation_ratio" in self.model_fields_set and self.compensation == "none":
+            raise ValueError("compensation_ratio: only with compensation = \"pre-post\"")
+        return self
 
 
 PSD_UNITS = Literal["g2/Hz", "(m/s2)2/Hz"]
@@ -740,6 +758,34 @@ class ReportFields(_Model):
     notes: str | None = None
 
 
+class ShockTest(_Model):
+    """What ``rbhyst shock`` holds the deck to (see README, "Shock"): the shock (a named pulse of
+    rbhyst.model.shock_pulses.PRESETS, a pulse of its own, or a record), how many along each
+    direction of each axis, and the limits (as for ``rbhyst qualify``; strokes from the elements)."""
+
+    pulse: str | Pulse[AccelUnits] | None = None
+    record: Record[AccelUnits] | None = None
+    #: a named pulse played with pre- and post-pulses ("pre-post") or bare ("none", the default)
+    compensation: Literal["none", "pre-post"] | None = None
+    #: the axes shocked (default: every axis of the deck), each in both directions
+    axes: Annotated[list[Literal["x1", "x2", "x3"]], Field(min_length=1)] | None = None
+    #: shocks in each direction of each axis, one after the other in one run (MIL-STD-810H 516.8
+    #: Procedure I: three)
+    shocks: Annotated[int, Field(ge=1, le=10)] = 3
+    acceleration_limit_g: dict[str, PosFloat | Annotated[list[PosFloat], Field(min_length=2, max_length=3)]] | None \
+        = None
+    force_capacity_N: PosFloat | dict[str, PosFloat] | None = None
+
+    @model_validator(mode="after")
+    def _one_shock(self):
+        if self.pulse is not None and self.record is not None:
+            raise _key_problems([("record", "not with shock.pulse: give a pulse or a record")])
+        if self.compensation is not None and not isinstance(self.pulse, str):
+            raise _key_problems([("compensation", "only with a named pulse (a pulse of its own says its own "
+                                                  "compensation)")])
+        return self
+
+
 class Deck(_Model):
     title: str | None = None
     body: Body | None = None
@@ -757,6 +803,7 @@ class Deck(_Model):
     qualify: Qualify | None = None
     #: who and what the report is for: printed on report.html, never read by the analysis
     report: ReportFields | None = None
+    shock: ShockTest | None = None
     #: the file the deck came from (None for one built in code): relative paths resolve beside it
     _source: Path | None = PrivateAttr(default=None)
 
@@ -862,7 +909,8 @@ KEY_UNITS: dict[tuple[str, ...], str] = {
     **{("isolators", "stroke", name): "m" for name in ("axial", "shear", "shear1", "shear2")},
     **{(*group, "*", name): unit for group in (("excitation", "support"), ("excitation", "force"))
        for name, unit in (("amplitude", "signal"), ("scale", ""), ("frequency_hz", "Hz"), ("phase_deg", "°"),
-                          ("start", "s"), ("duration", "s"), ("dt", "s"), ("cycles", ""), ("ramp_cycles", ""))},
+                          ("start", "s"), ("duration", "s"), ("dt", "s"), ("cycles", ""), ("ramp_cycles", ""),
+                          ("rise", "s"), ("compensation_ratio", ""))},
     ("excitation", "force", "point"): "m",
     ("analysis", "dt"): "s", ("analysis", "duration"): "s", ("analysis", "max_omega_dt"): "",
     ("analysis", "max_substep_level"): "", ("analysis", "rtol"): "", ("analysis", "tolerance"): "",
@@ -876,6 +924,11 @@ KEY_UNITS: dict[tuple[str, ...], str] = {
     ("qualify", "motions"): "", ("qualify", "seed"): "", ("qualify", "duration"): "s", ("qualify", "motion_dt"): "s",
     ("qualify", "acceleration_limit_g", "*"): "g", ("qualify", "force_capacity_N"): "N",
     ("qualify", "force_capacity_N", "*"): "N",
+    ("shock", "shocks"): "", ("shock", "acceleration_limit_g", "*"): "g", ("shock", "force_capacity_N"): "N",
+    ("shock", "force_capacity_N", "*"): "N",
+    **{("shock", "pulse", name): unit for name, unit in (("amplitude", "signal"), ("duration", "s"), ("start", "s"),
+                                                          ("rise", "s"), ("compensation_ratio", ""))},
+    ("shock", "record", "scale"): "", ("shock", "record", "dt"): "s",
 }
 #: units as written in a deck, as an axis shows them
 _SHOWN_UNITS = {"m/s2": "m/s²", "cm/s2": "cm/s²"}

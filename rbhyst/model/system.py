@@ -659,6 +659,12 @@ def _signal(spec, scale_units: dict[str, float], base: Path,
                          spec.ramp_cycles)
         return s, s.end
     if isinstance(spec, dk.Pulse):
+        if spec.type == "trapezoid" or spec.compensation != "none":  # as samples (shock_pulses)
+            from rbhyst.model.shock_pulses import classical_pulse
+
+            series = classical_pulse(spec.type, spec.amplitude * factor, spec.duration, spec.start,
+                                     spec.compensation, spec.compensation_ratio, spec.rise).series
+            return series, series.duration
         s = signals.Pulse(spec.type, spec.amplitude * factor, spec.duration, spec.start)
         return s, s.end
     path = Path(spec.file)

@@ -172,3 +172,11 @@ def write_spectra_csv(spectra: "LocatedSpectra", path: Path) -> None:
     lines += [f"{loc},{direction}," + ",".join(f"{v:.10g}" for v in row)
               for (loc, direction), row in zip(labels, numbers)]
     Path(path).write_text("\n".join(lines) + "\n", encoding="utf-8")
+
+
+def write_srs_csv(srs, path: Path) -> None:
+    """srs.csv: one row per Q and frequency (rbhyst.solve.shock_spectra.SRS_COLUMNS)."""
+    from rbhyst.solve.shock_spectra import SRS_COLUMNS
+
+    lines = [",".join(SRS_COLUMNS)] + [",".join(f"{v:.10g}" for v in row) for row in srs.table()]
+    Path(path).write_text("\n".join(lines) + "\n", encoding="utf-8")

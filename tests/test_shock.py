@@ -1,0 +1,132 @@
+"""``rbhyst shock``: a deck along each direction of each axis under a classical pulse, its demands
+those of each run's summary, a linear body's peak that of its oscillator's shock spectrum, and
+its verdict's exit status."""
+
+from __future__ import annotations
+
+import json
+import math
+
+import numpy as np
+import pytest
+from conftest import invoke, linear_set, write_deck
+
+from rbhyst.analyses.shock.drive import G
+from rbhyst.model.shock_pulses import classical_pulse
+from rbhyst.solve.shock_spectra import shock_spectrum
+
+MASS, K, C = 1000.0, 1.0e5, 4000.0
+
+
+def box(limit_g: float = 30.0, **shock) -> dict:
+    """A 1 m square of 1000 kg on two vertical linear springs of K at its bottom corners, two
+    horizontal ones at its mid-sides and a vertical damper at G: vertically an oscillator of
+    2 K, damping C (no rotation: the springs and the damper are symmetric about G)."""
+    return {
+        "body": {"vertices": [[-0.5, -0.5], [0.5, -0.5], [0.5, 0.5], [-0.5, 0.5]], "mass": MASS},
+        "hysteresis": {"lin": linear_set(K)},
+        "elements": [{"vertex": 1, "angle_deg": 90.0, "hysteresis": "lin", "stroke": 0.2},
+                     {"vertex": 2, "angle_deg": 90.0, "hysteresis": "lin", "stroke": 0.2},
+                     {"point": [0.0, 0.5], "angle_deg": 0.0, "hysteresis": "lin"},
+                     {"point": [0.0, -0.5], "angle_deg": 0.0, "hysteresis": "lin"}],
+        "dampers": [{"point": [0.0, 0.0], "angle_deg": 90.0, "c": C}],
+        "analysis": {"dt": 0.001},
+        "output": {"points": [{"name": "top", "point": [0.5, 0.5]}]},
+        "shock": {"pulse": "810c-basic-design", "axes": ["x2"], "shocks": 1,
+                  "acceleration_limit_g": {"G": limit_g}, "force_capacity_N": 1.0e6, **shock},
+    }
+
+
+def test_the_demands_are_each_runs_and_a_linear_body_peaks_at_its_spectrum(tmp_path):
+    out = tmp_path / "o"
+    code, err = invoke("shock", write_deck(tmp_path, box()), "--out", out, "--no-plots")
+    assert code == 0, err
+    data = json.loads((out / "shock.json").read_text())
+    assert [r["run"] for r in data["runs"]] == ["x2+", "x2-"]
+    summaries = {r["run"]: json.loads((out / r["summary"]).read_text()) for r in data["runs"]}
+    for c in data["criteria"]:
+        for run, value in c["per_run"].items():
+            s = summaries[run]
+            if c["criterion"] == "acceleration":
+                assert value == s["peaks"][c["column"]] / G
+            elif c["criterion"] == "force":
+                assert value == s["peaks"][c["column"]]
+        assert c["demand"] == max(c["per_run"].values())
+        assert c["worst_run"] in c["per_run"] and c["per_run"][c["worst_run"]] == c["demand"]
+    # vertically the box is an oscillator of 2 K and C: G's peak total acceleration is the maximax of
+    # that oscillator's shock spectrum under the drive (15 g 11 ms half-sine, bare)
+    zeta = C / (2.0 * math.sqrt(2.0 * K * MASS))
+    f = math.sqrt(2.0 * K / MASS) / (2.0 * math.pi)
+    p = classical_pulse("half-sine", 15.0 * G, 0.011)
+    want = shock_spectrum(p.series.values, p.series.dt, [f], [zeta]).maximax[0, 0] / G
+    got = next(c for c in data["criteria"] if c["item"] == "G x2")
+    assert got["per_run"]["x2+"] == pytest.approx(want, rel=1e-4)
+    # a linear body answers the reversed shock with the reversed motion
+    assert got["per_run"]["x2-"] == pytest.approx(got["per_run"]["x2+"], rel=1e-9)
+    assert data["drive"]["tolerance"]["pass"] and data["pass"]
+    assert data["worst"]["run"] in ("x2+", "x2-")
+
+
+def test_a_limit_exceeded_fails_and_repeated_shocks_of_a_linear_body_agree(tmp_path):
+    out = tmp_path / "o"
+    # (at dt = 0.2 ms: each shock's own peaks are over the rows, which at 1 ms miss 0.3 % of this one)
+    code, err = invoke("shock", write_deck(tmp_path, box(limit_g=0.2, compensation="pre-post", shocks=2)),
+                       "--out", out, "--no-plots", "--dt", "0.0002")
+    assert code == 1, err
+    assert "fail: acceleration G x2:" in err and "verdict: fail" in err
+    data = json.loads((out / "shock.json").read_text())
+    assert data["drive"]["pulse"]["compensation"] == "pre-post"
+    assert abs(data["drive"]["table"]["end_velocity_m_s"]) < 1e-12
+    for run in data["runs"]:
+        first, second = run["shocks"]
+        # the free vibration of the first has decayed (e^-(zeta w t) over the rest between them)
+        assert second["largest_change_from_the_first"] < 1e-3
+        assert first["from_s"] == 0.0 and second["from_s"] > 2.0
+
+
+@pytest.mark.parametrize("extra, args, said", [
+    ({"pulse": None}, [], "shock: no shock"),
+    ({"pulse": "mil-std-999"}, [], "shock.pulse: 'mil-std-999' is not a pulse rbhyst knows"),
+    ({}, ["--pulse", "nope"], "--pulse: 'nope' is not a pulse rbhyst knows"),
+    ({}, ["--axes", "x3"], "--axes: 'x3': an axis of the deck (x1, x2)"),
+    ({}, ["--record", "r.csv", "--pulse", "810c-basic-design"], "--record: not with --pulse"),
+    ({}, ["--record", "r.csv"], "--units: the units of --record's values"),
+    ({}, ["--record", "r.csv", "--units", "g", "--compensation", "pre-post"], "--compensation: only with a named"),
+    ({"acceleration_limit_g": {"nowhere": 3.0}}, [], "shock.acceleration_limit_g.nowhere: no point"),
+    ({"pulse": {"type": "half-sine", "amplitude": 10, "units": "g", "duration": 0.01, "start": 0.1}}, [],
+     "shock.pulse.start: a shock test's pulse starts at 0 s"),
+])
+def test_shock_mistakes(tmp_path, extra, args, said):
+    data = box()
+    data["shock"].update(extra)
+    data["shock"] = {k: v for k, v in data["shock"].items() if v is not None}
+    code, err = invoke("shock", write_deck(tmp_path, data), "--out", tmp_path / "o", *args)
+    assert code == 2 and said in err and "Traceback" not in err
+    assert not (tmp_path / "o").exists()
+
+
+def test_a_record_drive_and_its_plots(tmp_path):
+    t = np.arange(0, 401) * 2.5e-5
+    acc = np.where(t <= 0.01, 10.0 * np.sin(np.pi * t / 0.01), 0.0)
+    rec = tmp_path / "r.csv"
+    np.savetxt(rec, np.column_stack([t, acc]), delimiter=",", header="time_s,acceleration_g", comments="")
+    data = box()
+    del data["shock"]["pulse"]
+    out = tmp_path / "o"
+    code, err = invoke("shock", write_deck(tmp_path, data), "--record", rec, "--units", "g", "--out", out)
+    assert code == 0, err
+    facts = json.loads((out / "shock.json").read_text())["drive"]
+    assert facts["source"] == "the record r.csv" and facts["peak_g"] == pytest.approx(10.0)
+    assert (out / "srs.png").exists() and (out / "pvss.png").exists() and not (out / "pulse.png").exists()
+
+
+def test_the_sample_deck_asks_for_procedure_one():
+    from conftest import DECKS
+
+    from rbhyst.analyses.shock.verdict import request, run_labels
+    from rbhyst.model.deck import load_deck
+
+    req = request(load_deck(DECKS / "electronics_shock.toml"), {})
+    assert req.pulse[:4] == ("terminal-peak-sawtooth", 20.0 * G, 0.011, "pre-post")
+    assert req.shocks == 3 and run_labels(req) == ["x1+", "x1-", "x2+", "x2-"]
+    assert req.acceleration_limit_g == {"top": 15.0, "G": 12.0}
