@@ -122,17 +122,28 @@ def run(
 def modes(
     deck: Annotated[Path, typer.Argument(help="TOML or YAML deck ([body], [hysteresis] and [[elements]] suffice).")],
     as_json: Annotated[bool, typer.Option("--json", help="Print summary.json's modes as JSON instead of a table.")] = False,
+    amplitude: Annotated[Optional[float], typer.Option(
+        help="Every element at its effective (secant) stiffness on the steady cycle of this amplitude [m].")] = None,
+    stiffness: Annotated[Optional[str], typer.Option(
+        help="With --amplitude: secant (k_eff, the default) or reversal (the tangent just after a "
+             "reversal of that cycle: small vibrations about it).")] = None,
 ):
     """Natural frequencies and mode shapes of the deck's body on its elements, without running it.
 
     Of the initial system (M, K0) and, when the deck gives body.gravity, of the elements' tangents
-    at the static equilibrium under the weight. Undamped: dampers and Rayleigh damping do not
-    change them. Written to stdout; nothing is written to disk.
+    at the static equilibrium under the weight; with --amplitude, of every element's stiffness on
+    the steady cycle of that amplitude (as calibrate-plot --amplitudes writes to effective.csv).
+    Undamped: dampers and Rayleigh damping do not change them. Written to stdout; nothing is
+    written to disk.
     """
     from rbhyst import api
 
     with user_errors():
-        found = api.modes(deck)
+        try:
+            found = api.modes(deck, amplitude=amplitude, stiffness=stiffness)
+        except InputError as err:  # (the API's argument names are the command's options)
+            raise InputError([p if not p.startswith(("amplitude:", "stiffness:")) else "--" + p
+                              for p in err.problems]) from None
     if as_json:
         import json
 
@@ -209,9 +220,14 @@ def calibrate_plot(
     f_units: Annotated[Optional[str], typer.Option(help="Force units of --data (N, kN, ...).")] = None,
     out: Annotated[Optional[Path], typer.Option(
         "--out", help="Output folder (default: results/<deck stem>-loops/ beside the deck).")] = None,
+    amplitudes: Annotated[Optional[str], typer.Option(
+        help="Also write effective.csv: each set's effective stiffness and damping on its steady "
+             "cycle of each of these amplitudes [m], comma-separated.")] = None,
 ):
-    """Force-displacement loops of VRM sets: loops.png, loops_<set>.csv, summary.json (fit.json with --data)."""
-    from rbhyst.analyses.calibration import header, loop_result, protocol, safe_names, write_json, write_loop_csv
+    """Force-displacement loops of VRM sets: loops.png, loops_<set>.csv, summary.json (fit.json with
+    --data; effective.csv with --amplitudes)."""
+    from rbhyst.analyses.calibration import (effective_rows, header, loop_result, protocol, safe_names, write_effective_csv,
+                                             write_json, write_loop_csv)
     from rbhyst.model.deck import load_deck
     from rbhyst.files.outdir import staged_directory
     from rbhyst.model.testdata import read_loop_data
@@ -219,6 +235,8 @@ def calibrate_plot(
     with user_errors():
         d = load_deck(deck)  # the sets (and [loops]) are enough
         names = _chosen_sets(deck, d, sets)
+        amps = _amplitudes(amplitudes)
+        effective = None if amps is None else effective_rows({n: d.hysteresis[n].array() for n in names}, amps)
         if data is not None:
             measured = read_loop_data(data, u_units, f_units)
             u, f_data = measured.u, measured.f
@@ -237,6 +255,9 @@ def calibrate_plot(
         with staged_directory(target) as tmp:
             for r in results:
                 write_loop_csv(r, tmp / f"loops_{files[r.name]}.csv")
+            if effective is not None:
+                summary["effective"] = effective
+                write_effective_csv(effective, tmp / "effective.csv")
             write_json(summary, tmp / "summary.json")
             if measured is not None:
                 write_json({**header("calibrate-plot"), "deck": deck.name, "data": measured.name,
@@ -253,7 +274,21 @@ def calibrate_plot(
         cyc = f"{len(ed)} closed cycle{'s' if len(ed) != 1 else ''}, last dissipates {ed[-1]:.6g} J" if ed \
             else "no closed cycle"
         say(f"{r.name}: {fit}hysteretic work {r.work[-1]:.6g} J, {cyc}")
+    for row in effective or ():
+        say(f"{row['set']} at {row['amplitude_m']:g} m: k_eff {row['k_eff_N_m']:.5g} N/m, "
+            f"beta_eff {row['beta_eff']:.4f}, {row['energy_J']:.5g} J per cycle")
     say(f"wrote {target}")
+
+
+def _amplitudes(text: str | None) -> list[float] | None:
+    """--amplitudes as a list of positive floats [m], or InputError naming every bad one."""
+    amps = _split_list(text, "--amplitudes", float)
+    if amps is None:
+        return None
+    bad = [a for a in amps if not a > 0.0]
+    if not amps or bad:
+        raise InputError(f"--amplitudes: {text!r}: displacement amplitudes > 0 in m, comma-separated")
+    return amps
 
 
 @app.command(cls=Command)
