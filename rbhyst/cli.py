@@ -864,6 +864,19 @@ def make_motion(
                 from rbhyst.report.qualification import plot_trs
 
                 plot_trs(made, spectra, tmp / "trs.png")
+    for line in _motion_lines(made):
+        say(line)
+    say(f"wrote {out}")
+
+
+#: the first line of every record make-motion writes
+MOTION_MARK = "# rbhyst make-motion"
+
+
+def _motion_lines(made) -> list[str]:
+    """make-motion's console lines: each record's TRS check, peak and strong motion, then each
+    motion's correlation and coherence between its axes."""
+    lines = []
     for m in made:
         for axis, r in m.records.items():
             least = "" if r.check.peak_min is None else f" (at least {r.check.peak_min / 9.80665:.3g} g)"
@@ -872,20 +885,16 @@ def make_motion(
                 strong += (f"; asks the table {r.reached['displacement']:.3g} m peak to peak, "
                            f"{r.reached['velocity']:.3g} m/s, {r.reached['acceleration']:.3g} g (high-pass from "
                            f"{r.high_pass:.3g} Hz)")
-            say(f"motion {m.number} {axis}: TRS from {r.check.said()} at {len(r.check.fine_frequency)} frequencies "
-                f"({r.iterations} iterations); peak {float(abs(r.acc_g).max()):.3g} g{least}; strong motion "
-                f"{r.strong:.3g} s{strong}")
+            lines.append(f"motion {m.number} {axis}: TRS from {r.check.said()} at {len(r.check.fine_frequency)} "
+                         f"frequencies ({r.iterations} iterations); peak {float(abs(r.acc_g).max()):.3g} g{least}; strong motion "
+                         f"{r.strong:.3g} s{strong}")
         coherence = m.coherences()
         for pair, c in m.correlations.items():
             a, b = pair.split("_")
-            say(f"motion {m.number}: correlation of {a} and {b} {c:+.3f}; coherence {coherence[pair]['mean']:.3f} "
-                f"on average over {coherence[pair]['band_hz'][0]:.3g}-{coherence[pair]['band_hz'][1]:.3g} Hz "
-                f"(largest {coherence[pair]['max']:.3f})")
-    say(f"wrote {out}")
-
-
-#: the first line of every record make-motion writes
-MOTION_MARK = "# rbhyst make-motion"
+            lines.append(f"motion {m.number}: correlation of {a} and {b} {c:+.3f}; coherence "
+                         f"{coherence[pair]['mean']:.3f} on average over {coherence[pair]['band_hz'][0]:.3g}-"
+                         f"{coherence[pair]['band_hz'][1]:.3g} Hz (largest {coherence[pair]['max']:.3f})")
+    return lines
 
 
 @app.command(cls=Command)
