@@ -12,12 +12,12 @@ import math
 import numpy as np
 import pytest
 import scipy.linalg
+from conftest import DECKS, invoke, write_deck
 from scipy.integrate import quad
 from typer.testing import CliRunner
 
 import rbhyst
 from rbhyst.cli import app
-from conftest import DECKS, invoke, write_deck
 
 runner = CliRunner()
 

@@ -69,6 +69,8 @@ class Effective:
 def settling_cycles(p: np.ndarray, amplitude: float) -> int:
     """Cycles after which the reversal forces are those of the steady loop to SETTLED (at least 1)."""
     rate = 2.0 * amplitude * (float(p[0, ALPHA]) + float(p[1, ALPHA]))
+    if not rate > 0.0:  # (a deck's alpha is > 0; a fit's may underflow)
+        return MAX_SETTLING
     return int(min(MAX_SETTLING, max(1, math.ceil(-math.log(SETTLED) / rate))))
 
 
