@@ -313,8 +313,6 @@ def calibrate(
         "--out", help="Output folder (default: results/<data stem>-calibrate/ beside the data).")] = None,
 ):
     """Identify a VRM set from measured loops (or a catalogue): fitted.toml (deck fragment), fit.json, loops.png."""
-    import tomllib
-
     if (data is None) == (catalogue is None):
         with user_errors():
             raise InputError("calibrate: a measured loop (DATA) or --catalogue FILE.csv, not both" if data is not None
@@ -325,6 +323,17 @@ def calibrate(
                 raise InputError("--u-units/--f-units: not with --catalogue (its columns are in m and N)")
         _calibrate_catalogue(catalogue, set_name, init, free, fix, starts, seed, out)
         return
+    _calibrate_loop(data, set_name, init, free, fix, starts, seed, u_units, f_units, out)
+
+
+#: NRMSE above which ``calibrate`` warns that the fit does not follow the data
+POOR_FIT_NRMSE = 0.05
+
+
+def _calibrate_loop(data: Path, set_name: str, init: Path, free, fix, starts: int, seed: int, u_units, f_units,
+                    out) -> None:
+    """calibrate DATA: the set fitted to a measured loop (rbhyst.analyses.calibration.fit_set)."""
+    import tomllib
 
     from rbhyst.analyses.calibration import (NAMES, check_orientation, deck_fragment, fit_set, header, loop_result, parameters_dict, parse_names, round_set, safe_names, write_json, write_loop_csv)
     from rbhyst.model.deck import load_deck, parse_deck
@@ -384,10 +393,6 @@ def calibrate(
         say(f"warning: NRMSE {res.nrmse:.1%} is above {POOR_FIT_NRMSE:.0%}: the set does not follow the data; "
             "look at loops.png, try another --init or free more parameters")
     say(f"wrote {target}")
-
-
-#: NRMSE above which ``calibrate`` warns that the fit does not follow the data
-POOR_FIT_NRMSE = 0.05
 
 
 def _calibrate_catalogue(path: Path, set_name: str, init: Path, free, fix, starts: int, seed: int, out) -> None:
