@@ -116,17 +116,38 @@ def replaced_results(folder: Path, command: str = "run", as_run: dict | None = N
     return [f"{folder}: replaces the results of another deck, {old!r}, that were there"]
 
 
-def modes(deck: Deck | str | Path) -> dict:
+def modes(deck: Deck | str | Path, amplitude: float | None = None, stiffness: str | None = None) -> dict:
     """The undamped natural frequencies and mode shapes of a deck's body on its elements, without
     running anything: exactly summary.json's ``modes`` (coordinates, frequencies_hz ascending,
     shapes, stiffness; ``at_rest`` with the tangents at the static equilibrium under gravity).
     Only [body], [hysteresis] and [[elements]] are needed; a mistake is an InputError, elements
-    that cannot carry the weight an AnalysisError."""
-    from rbhyst.model.system import assemble
-    from rbhyst.solve.modes import modes_summary
+    that cannot carry the weight an AnalysisError.
 
+    With ``amplitude`` (m): the modes with every element at its effective (secant) stiffness on
+    the steady cycle of that amplitude (``stiffness="secant"``, the default) or at its tangent
+    just after a reversal of it (``"reversal"``), rbhyst.model.effective; the same form, with
+    ``amplitude_m``."""
+    from rbhyst.model.system import assemble
+    from rbhyst.solve.modes import REVERSAL, SECANT, amplitude_modes, modes_summary
+
+    problems = []
+    if stiffness is not None and amplitude is None:
+        problems.append(f"stiffness: {stiffness!r} needs an amplitude (the cycle it is taken on)")
+    if stiffness is not None and stiffness not in (SECANT, REVERSAL):
+        problems.append(f"stiffness: {stiffness!r}: {SECANT} or {REVERSAL}")
+    if amplitude is not None and not (isinstance(amplitude, (int, float)) and amplitude > 0):
+        problems.append(f"amplitude: {amplitude!r}: a displacement amplitude > 0 in m")
+    if problems:
+        raise InputError(problems)
     d = deck if isinstance(deck, Deck) else load_deck(deck, need=MODES_SECTIONS)
-    return modes_summary(assemble(d, d.base, run=False))
+    system = assemble(d, d.base, run=False)
+    if amplitude is None:
+        return modes_summary(system)
+    try:
+        found = amplitude_modes(system, float(amplitude), stiffness or SECANT)
+    except OverflowError as exc:
+        raise InputError(f"amplitude: {amplitude:g} m: a set's exponential overflows on that cycle ({exc})") from None
+    return {**found.summary(), "amplitude_m": float(amplitude)}
 
 
 def write(result: Result, out: str | Path, plots: bool = True) -> Path:

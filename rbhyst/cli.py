@@ -126,10 +126,10 @@ def run(
             say(f"note: {note}")
     for warning in result.warnings:
         say(f"warning: {warning}")
-    from rbhyst.report.console import element_table, mode_table
+    from rbhyst.report.console import element_table, mode_table, rang_lines
 
     summary = result.summary()
-    for line in mode_table(summary["modes"]):  # what the body is, then what it did
+    for line in mode_table(summary["modes"]) + rang_lines(summary.get("rang")):  # what the body is, then what it did
         say(line)
     say(run_line(result))
     for line in element_table(summary):
@@ -141,17 +141,28 @@ def run(
 def modes(
     deck: Annotated[Path, typer.Argument(help="TOML or YAML deck ([body], [hysteresis] and [[elements]] suffice).")],
     as_json: Annotated[bool, typer.Option("--json", help="Print summary.json's modes as JSON instead of a table.")] = False,
+    amplitude: Annotated[Optional[float], typer.Option(
+        help="Every element at its effective (secant) stiffness on the steady cycle of this amplitude [m].")] = None,
+    stiffness: Annotated[Optional[str], typer.Option(
+        help="With --amplitude: secant (k_eff, the default) or reversal (the tangent just after a "
+             "reversal of that cycle: small vibrations about it).")] = None,
 ):
     """Natural frequencies and mode shapes of the deck's body on its elements, without running it.
 
     Of the initial system (M, K0) and, when the deck gives body.gravity, of the elements' tangents
-    at the static equilibrium under the weight. Undamped: dampers and Rayleigh damping do not
-    change them. Written to stdout; nothing is written to disk.
+    at the static equilibrium under the weight; with --amplitude, of every element's stiffness on
+    the steady cycle of that amplitude (as calibrate-plot --amplitudes writes to effective.csv).
+    Undamped: dampers and Rayleigh damping do not change them. Written to stdout; nothing is
+    written to disk.
     """
     from rbhyst import api
 
     with user_errors():
-        found = api.modes(deck)
+        try:
+            found = api.modes(deck, amplitude=amplitude, stiffness=stiffness)
+        except InputError as err:  # (the API's argument names are the command's options)
+            raise InputError([p if not p.startswith(("amplitude:", "stiffness:")) else "--" + p
+                              for p in err.problems]) from None
     if as_json:
         import json
 
@@ -233,9 +244,14 @@ def calibrate_plot(
     f_units: Annotated[Optional[str], typer.Option(help="Force units of --data (N, kN, ...).")] = None,
     out: Annotated[Optional[Path], typer.Option(
         "--out", help="Output folder (default: results/<deck stem>-loops/ beside the deck).")] = None,
+    amplitudes: Annotated[Optional[str], typer.Option(
+        help="Also write effective.csv: each set's effective stiffness and damping on its steady "
+             "cycle of each of these amplitudes [m], comma-separated.")] = None,
 ):
-    """Force-displacement loops of VRM sets: loops.png, loops_<set>.csv, summary.json (fit.json with --data)."""
-    from rbhyst.analyses.calibration import header, loop_result, protocol, safe_names, write_json, write_loop_csv
+    """Force-displacement loops of VRM sets: loops.png, loops_<set>.csv, summary.json (fit.json with
+    --data; effective.csv with --amplitudes)."""
+    from rbhyst.analyses.calibration import (effective_rows, header, loop_result, protocol, safe_names, write_effective_csv,
+                                             write_json, write_loop_csv)
     from rbhyst.model.deck import load_deck
     from rbhyst.files.outdir import staged_directory
     from rbhyst.model.testdata import read_loop_data
@@ -243,6 +259,8 @@ def calibrate_plot(
     with user_errors():
         d = load_deck(deck)  # the sets (and [loops]) are enough
         names = _chosen_sets(deck, d, sets)
+        amps = _amplitudes(amplitudes)
+        effective = None if amps is None else effective_rows({n: d.hysteresis[n].array() for n in names}, amps)
         if data is not None:
             measured = read_loop_data(data, u_units, f_units)
             u, f_data = measured.u, measured.f
@@ -262,6 +280,9 @@ def calibrate_plot(
         with staged_directory(target) as tmp:
             for r in results:
                 write_loop_csv(r, tmp / f"loops_{files[r.name]}.csv")
+            if effective is not None:
+                summary["effective"] = effective
+                write_effective_csv(effective, tmp / "effective.csv")
             write_json(summary, tmp / "summary.json")
             if measured is not None:
                 write_json({**header("calibrate-plot"), "deck": deck.name, "data": measured.name,
@@ -278,17 +299,36 @@ def calibrate_plot(
         cyc = f"{len(ed)} closed cycle{'s' if len(ed) != 1 else ''}, last dissipates {ed[-1]:.6g} J" if ed \
             else "no closed cycle"
         say(f"{r.name}: {fit}hysteretic work {r.work[-1]:.6g} J, {cyc}")
+    for row in effective or ():
+        say(f"{row['set']} at {row['amplitude_m']:g} m: k_eff {row['k_eff_N_m']:.5g} N/m, "
+            f"beta_eff {row['beta_eff']:.4f}, {row['energy_J']:.5g} J per cycle")
     say(f"wrote {target}")
+
+
+def _amplitudes(text: str | None) -> list[float] | None:
+    """--amplitudes as a list of positive floats [m], or InputError naming every bad one."""
+    amps = _split_list(text, "--amplitudes", float)
+    if amps is None:
+        return None
+    bad = [a for a in amps if not a > 0.0]
+    if not amps or bad:
+        raise InputError(f"--amplitudes: {text!r}: displacement amplitudes > 0 in m, comma-separated")
+    return amps
 
 
 @app.command(cls=Command)
 def calibrate(
-    data: Annotated[Path, typer.Argument(help="Measured loop: CSV with displacement and force columns, units in the header.")],
-    set_name: Annotated[str, typer.Option("--set", help="The set to identify (its name in --init).")],
-    init: Annotated[Path, typer.Option(help="Deck holding the starting values of the set.")],
+    data: Annotated[Optional[Path], typer.Argument(
+        help="Measured loop: CSV with displacement and force columns, units in the header (or --catalogue).")] = None,
+    set_name: Annotated[str, typer.Option("--set", help="The set to identify (its name in --init).")] = ...,
+    init: Annotated[Path, typer.Option(help="Deck holding the starting values of the set.")] = ...,
+    catalogue: Annotated[Optional[Path], typer.Option(
+        help="Instead of a measured loop: a catalogue CSV, columns amplitude_m, k_eff_N_m, beta_eff (and optionally "
+             "force_N, a static point): a symmetric set matching each row's effective stiffness and damping.")] = None,
     free: Annotated[Optional[list[str]], typer.Option(
         help="Parameters to fit (repeatable or comma-separated): loading.kb, kb+, kb- or kb for both "
-             "branches. Default: all 16.")] = None,
+             "branches. Default: all 16. With --catalogue: kb, f0, alpha, beta1, ... without a branch "
+             "(the set stays symmetric), default kb,f0,alpha.")] = None,
     fix: Annotated[Optional[list[str]], typer.Option(help="Parameters to keep at their --init values.")] = None,
     starts: Annotated[int, typer.Option(min=1, help="Number of starts (the first is --init).")] = 6,
     seed: Annotated[int, typer.Option(help="Random seed for the extra starts.")] = 0,
@@ -297,7 +337,27 @@ def calibrate(
     out: Annotated[Optional[Path], typer.Option(
         "--out", help="Output folder (default: results/<data stem>-calibrate/ beside the data).")] = None,
 ):
-    """Identify a VRM set from measured loops: fitted.toml (deck fragment), fit.json, loops.png."""
+    """Identify a VRM set from measured loops (or a catalogue): fitted.toml (deck fragment), fit.json, loops.png."""
+    if (data is None) == (catalogue is None):
+        with user_errors():
+            raise InputError("calibrate: a measured loop (DATA) or --catalogue FILE.csv, not both" if data is not None
+                             else "calibrate: give a measured loop (DATA) or --catalogue FILE.csv")
+    if catalogue is not None:
+        with user_errors():
+            if u_units is not None or f_units is not None:
+                raise InputError("--u-units/--f-units: not with --catalogue (its columns are in m and N)")
+        _calibrate_catalogue(catalogue, set_name, init, free, fix, starts, seed, out)
+        return
+    _calibrate_loop(data, set_name, init, free, fix, starts, seed, u_units, f_units, out)
+
+
+#: NRMSE above which ``calibrate`` warns that the fit does not follow the data
+POOR_FIT_NRMSE = 0.05
+
+
+def _calibrate_loop(data: Path, set_name: str, init: Path, free, fix, starts: int, seed: int, u_units, f_units,
+                    out) -> None:
+    """calibrate DATA: the set fitted to a measured loop (rbhyst.analyses.calibration.fit_set)."""
     import tomllib
 
     from rbhyst.analyses.calibration import (NAMES, check_orientation, deck_fragment, fit_set, header, loop_result, parameters_dict, parse_names, round_set, safe_names, write_json, write_loop_csv)
@@ -361,8 +421,59 @@ def calibrate(
     say(f"wrote {target}")
 
 
-#: NRMSE above which ``calibrate`` warns that the fit does not follow the data
-POOR_FIT_NRMSE = 0.05
+def _calibrate_catalogue(path: Path, set_name: str, init: Path, free, fix, starts: int, seed: int, out) -> None:
+    """calibrate --catalogue: the symmetric set matching the catalogue's rows (rbhyst.analyses.catalogue):
+    fitted.toml, fit.json, effective.csv of the fitted set, loops.png against the catalogue."""
+    import tomllib
+
+    from rbhyst.analyses.calibration import deck_fragment, header, parameters_dict, round_set, write_effective_csv, write_json
+    from rbhyst.analyses.catalogue import (DEFAULT_FREE, MATCHED, compare, fit_catalogue, parse_free, read_catalogue)
+    from rbhyst.files.outdir import staged_directory
+    from rbhyst.model.deck import load_deck, parse_deck
+
+    with user_errors():
+        d = load_deck(init)
+        _chosen_sets(init, d, [set_name])
+        cat = read_catalogue(path)
+        chosen = parse_free(free) if free else list(DEFAULT_FREE)
+        fixed = parse_free(fix) if fix else []
+        chosen = [n for n in chosen if n not in fixed]
+        if not chosen:
+            raise InputError("--free: no parameter left to fit")
+        p0 = d.hysteresis[set_name].array()
+        fit = fit_catalogue(p0, cat, chosen, starts=starts, seed=seed)
+        p = round_set(fit.p)  # what fitted.toml holds: every number reported is for it
+        rows = compare(p, cat)
+        worst = max(abs(v["misfit"]) for r in rows for v in r.values() if isinstance(v, dict))
+        fragment = deck_fragment(set_name, p, f"symmetric VRM set fitted by rbhyst calibrate to the catalogue "
+                                 f"{cat.name} ({len(cat.rows)} rows):\nlargest misfit {worst:.3%}. Paste into a deck as it is.")
+        try:
+            parse_deck(tomllib.loads(fragment))
+        except InputError as err:
+            raise AnalysisError(f"calibration failed: the fitted set is not a valid deck set: {err.problems[0]}") \
+                from None
+        report = {**header("calibrate"), "catalogue": cat.name, "init": init.name, "set": set_name,
+                  "free": fit.free, "starts": starts, "seed": seed, "parameters": parameters_dict(p),
+                  "largest_misfit": worst, "matched_within": MATCHED, "rows": rows,
+                  "function_evaluations": fit.nfev, "start_log": fit.starts}
+        effective = [{"set": set_name, "amplitude_m": r["amplitude_m"], "k_eff_N_m": r["k_eff_N_m"]["set"],
+                      "beta_eff": r["beta_eff"]["set"], "energy_J": r["energy_J"]} for r in rows if "k_eff_N_m" in r]
+        target = out if out is not None else path.parent / "results" / f"{path.stem}-calibrate"
+        with staged_directory(target) as tmp:
+            (tmp / "fitted.toml").write_text(fragment, encoding="utf-8")
+            write_json(report, tmp / "fit.json")
+            write_effective_csv(effective, tmp / "effective.csv")
+            from rbhyst.report.loops import plot_catalogue
+
+            plot_catalogue(set_name, p, cat, tmp / "loops.png", title=f"{set_name} fitted to {cat.name}")
+    for r in rows:
+        said = ", ".join(f"{k} {v['set']:.5g} ({v['misfit']:+.2%})" for k, v in r.items() if isinstance(v, dict))
+        say(f"{set_name} at {r['amplitude_m']:g} m: {said}")
+    say(f"{set_name}: largest misfit {worst:.3%} with {', '.join(fit.free)} free, {len(fit.starts)} starts")
+    if worst > MATCHED:
+        say(f"warning: the symmetric set misses the catalogue by {worst:.1%} (more than {MATCHED:.0%}) at worst; "
+            "look at loops.png, free more parameters (--free kb,f0,alpha,beta1,beta2) or try another --init")
+    say(f"wrote {target}")
 
 
 def _chosen_sets(deck_path: Path, deck, names: list[str] | None) -> list[str]:

@@ -597,6 +597,31 @@ def write_loop_csv(res: LoopResult, path: Path) -> None:
     np.savetxt(path, np.column_stack(cols), delimiter=",", header=",".join(names), comments="", fmt="%.10g")
 
 
+def effective_rows(sets: dict[str, np.ndarray], amplitudes) -> list[dict]:
+    """effective.csv's rows (rbhyst.model.effective): every set at every amplitude; AnalysisError
+    where a set's exponentials overflow on a cycle."""
+    from rbhyst.model.effective import effective
+
+    rows = []
+    for name, p in sets.items():
+        for a in amplitudes:
+            try:
+                rows.append(effective(p, a).row(name))
+            except OverflowError as exc:
+                raise AnalysisError(f"hysteresis.{name}: the cycle of amplitude {a:g} m: {exc}") from None
+    return rows
+
+
+def write_effective_csv(rows: list[dict], path: Path) -> None:
+    """effective.csv: set, amplitude_m, k_eff_N_m, beta_eff, energy_J (12 significant digits)."""
+    from rbhyst.model.effective import COLUMNS
+
+    lines = [",".join(COLUMNS)]
+    for r in rows:
+        lines.append(",".join([r["set"]] + [f"{r[c]:.12g}" for c in COLUMNS[1:]]))
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+
+
 def write_json(obj: dict, path: Path) -> None:
     path.write_text(json.dumps(_plain(obj), indent=2) + "\n", encoding="utf-8")
 

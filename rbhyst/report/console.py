@@ -124,3 +124,18 @@ def mode_table(modes: dict) -> list[str]:
 WHICH_MODES = ("which to use: the modes at rest are those of the body as installed, its elements loaded by its weight",
                "  (their loading tangents): compare them with the equipment's measured frequencies on its mounts;",
                "  the initial ones (K0, independent of the load) are those Rayleigh damping and the integrators take.")
+
+
+def rang_lines(rang: dict | None) -> list[str]:
+    """One line for summary.json's ``rang`` (rbhyst.solve.ringing): the coordinates that rang after
+    the excitation, their frequency and those of their first and last cycle at their amplitudes."""
+    coords = (rang or {}).get("coordinates") or {}
+    parts = []
+    for name, c in coords.items():
+        if c.get("frequency_hz") is None:
+            continue
+        unit = "rad" if name.startswith("theta") else "m"
+        parts.append(f"{name} {c['frequency_hz']:.4g} Hz (first cycle {c['first_cycle_hz']:.4g} Hz at "
+                     f"{c['amplitude_first']:.3g} {unit}, last {c['last_cycle_hz']:.4g} Hz at "
+                     f"{c['amplitude_last']:.3g} {unit})")
+    return [f"rang after the excitation: {'; '.join(parts)}"] if parts else []

@@ -88,3 +88,46 @@ def plot_loops(results: list[LoopResult], path: Path, title: str | None = None,
         fig.suptitle(title, fontsize=10)
     save(fig, path)
     return fig
+
+
+@styled
+def plot_catalogue(name: str, p: np.ndarray, catalogue, path: Path, title: str | None = None):
+    """The fitted set's steady cycle at every catalogue amplitude (rbhyst.model.effective) against the
+    catalogue: its secant points (+-A, +-k_eff A) as markers, and the ellipse of the equivalent linear
+    viscous loop (stiffness k_eff, the same area 2 pi beta_eff k_eff A^2) dashed; a static
+    load-deflection row as a square on the set's first loading. Returns the figure."""
+    from rbhyst.model.effective import effective
+    from rbhyst.model.vrm import loop
+
+    fig, ax = subplots(1, 1, figsize=(8.2, 4.4))
+    rows = catalogue.rows
+    a_max = max(r.amplitude for r in rows)
+    f_max = max([abs(r.k_eff) * r.amplitude for r in catalogue.cycles] + [abs(r.force) for r in catalogue.static])
+    u_unit, u_fac, f_unit, f_fac = _display_units(a_max, f_max)
+    theta = np.linspace(0.0, 2.0 * np.pi, 200)
+    for k, r in enumerate(sorted(catalogue.cycles, key=lambda r: r.amplitude)):
+        colour = f"C{k % 10}"
+        e = effective(p, r.amplitude)
+        ax.plot(e.u * u_fac, e.f * f_fac, color=colour, lw=1.4,
+                label=f"{r.amplitude * u_fac:g} {u_unit}: k_eff {e.k_eff:.4g} N/m, beta {e.beta_eff:.3f}")
+        ua = r.amplitude * np.cos(theta)
+        fa = r.k_eff * ua + 2.0 * r.beta_eff * r.k_eff * r.amplitude * np.sin(theta)
+        ax.plot(ua * u_fac, fa * f_fac, color=colour, lw=0.8, ls="--")
+        ax.plot(np.array([-1.0, 1.0]) * r.amplitude * u_fac, np.array([-1.0, 1.0]) * r.k_eff * r.amplitude * f_fac,
+                ls="none", marker="o", ms=6, mfc="none", mec="0.1", mew=1.0)
+    if catalogue.static:
+        d = max(r.amplitude for r in catalogue.static)
+        ug = np.linspace(0.0, d, 200)
+        ax.plot(ug * u_fac, loop(p, ug)[0] * f_fac, color="0.35", lw=1.0, label="first loading")
+        ax.plot([r.amplitude * u_fac for r in catalogue.static], [r.force * f_fac for r in catalogue.static],
+                ls="none", marker="s", ms=5, mfc="none", mec="0.1", label="catalogue, static")
+    ax.plot([], [], ls="none", marker="o", ms=6, mfc="none", mec="0.1", label="catalogue: (±A, ±k_eff A)")
+    ax.plot([], [], color="0.3", lw=0.8, ls="--", label="catalogue: equivalent linear loop")
+    ax.axhline(0.0, color="0.6", lw=0.5)
+    ax.axvline(0.0, color="0.6", lw=0.5)
+    ax.set_xlabel(f"u [{u_unit}]")
+    ax.set_ylabel(f"f [{f_unit}]")
+    ax.set_title(title or name, fontsize=9)
+    ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), fontsize=7, framealpha=0.9)
+    save(fig, path)
+    return fig

@@ -18,6 +18,9 @@ from rbhyst.solve.kernels.layout import K as TANGENT
 
 INITIAL = "initial"
 AT_REST = "tangent at rest under gravity"
+#: the stiffnesses of rbhyst.model.effective a mode set may take at an amplitude
+SECANT = "secant"
+REVERSAL = "reversal"
 #: an eigenvalue omega^2 within this fraction of the largest of zero is a rigid-body mode (0 Hz)
 RIGID = 1e-10
 #: frequencies this close (relative) are one repeated frequency: their shapes are one choice
@@ -34,7 +37,7 @@ class Modes:
     coordinates: tuple[str, ...]
     frequencies_hz: tuple[float, ...]
     shapes: tuple[tuple[float, ...], ...]
-    stiffness: str  # INITIAL or AT_REST
+    stiffness: str  # INITIAL, AT_REST or what amplitude_modes took
     notes: tuple[str, ...] = ()
 
     def summary(self) -> dict:
@@ -125,6 +128,33 @@ def in_deck_axes(system, k: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     if frame is None:
         return system.mass, k
     return (frame * system.mass) @ frame.T, frame @ k @ frame.T
+
+
+def amplitude_stiffness(system, amplitude: float, stiffness: str = SECANT) -> np.ndarray:
+    """(ne,) each element row's stiffness on the steady symmetric cycle of ``amplitude`` m of its
+    set (rbhyst.model.effective): its k_eff (secant) or its tangent just after a reversal. Every
+    element at the same amplitude: the modes of a body that moves that much in its mounts."""
+    from rbhyst.model.effective import effective
+
+    if stiffness not in (SECANT, REVERSAL):
+        raise ValueError(f"stiffness {stiffness!r}: {SECANT} or {REVERSAL}")
+    found: dict[bytes, float] = {}
+    out = np.empty(len(system.params))
+    for row, p in enumerate(system.params):
+        key = p.tobytes()  # (rows of one set share the cycle)
+        if key not in found:
+            cycle = effective(p, amplitude)
+            found[key] = cycle.k_eff if stiffness == SECANT else cycle.k_reversal
+        out[row] = found[key]
+    return out
+
+
+def amplitude_modes(system, amplitude: float, stiffness: str = SECANT) -> Modes:
+    """The modes of (M, K(A)), K(A) = B^T diag(mult k(A)) B with :func:`amplitude_stiffness`."""
+    k = element_stiffness(system, amplitude_stiffness(system, amplitude, stiffness))
+    what = (f"effective (secant) stiffness at {amplitude:g} m" if stiffness == SECANT
+            else f"tangent just after a reversal at {amplitude:g} m")
+    return modes_of(*in_deck_axes(system, k), coordinate_names(system), what)
 
 
 def tangent_at_rest(system) -> np.ndarray:

@@ -168,6 +168,7 @@ class Result:
             **({"rayleigh": system.rayleigh.summary()} if getattr(system, "rayleigh", None) is not None else {}),
             **({"static": self._static_summary()} if system.static is not None else {}),
             "modes": self._modes_summary(),
+            **({"rang": self.rang_summary()} if self.compared is not None else {}),
             "analysis": {
                 "integrator": s.integrator,
                 "dt_s": s.dt,
@@ -258,6 +259,22 @@ class Result:
 
             system = dataclasses.replace(system, weight=None)
         return modes_summary(system)
+
+    def rang_summary(self) -> dict:
+        """The frequency each coordinate rang at after the excitation ended (rbhyst.solve.ringing),
+        from the response the error estimate compares."""
+        from rbhyst.solve.ringing import ringing
+
+        coords = self.system.coordinates
+        ends = [signal.end for signal in self.system.excitation.signals.values()]
+        free_from = None if None in ends else max(ends, default=0.0)
+        n = len(coords)
+        m = np.asarray(self.system.mass, dtype=float)
+        m = np.diag(m) if m.ndim == 2 else m
+        mt = max((m[i] for i, c in enumerate(coords) if not c.rotation), default=1.0)
+        lengths = [float(np.sqrt(m[i] / mt)) if c.rotation else 1.0 for i, c in enumerate(coords)]
+        return ringing(self.compared[:, 0], self.compared[:, 1:1 + n], [c.key("d") for c in coords], free_from,
+                       lengths)
 
     def _final(self, name: str) -> float:
         return self.plot.final[self.columns.index(name)]
