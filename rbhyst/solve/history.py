@@ -301,10 +301,10 @@ class Layout:
         u_i (sum_i c_ij^2 = n / 2: the projection back), f_j = sum_i c_ij f_i."""
         el = self.slices["elements"].start
         first = self.slices["shear"].start
-        for m, (_, columns, weights) in enumerate(self._shear):
-            u = out[:, [el + 2 * c for c in columns]]
-            f = out[:, [el + 2 * c + 1 for c in columns]]
-            n = len(columns)
+        for m, (_, springs, weights) in enumerate(self._shear):
+            u = out[:, [el + 2 * c for c in springs]]
+            f = out[:, [el + 2 * c + 1 for c in springs]]
+            n = len(springs)
             for j in range(2):
                 out[:, first + 4 * m + 2 * j] = (2.0 / n) * (u @ weights[j])
                 out[:, first + 4 * m + 2 * j + 1] = f @ weights[j]
