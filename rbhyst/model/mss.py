@@ -27,7 +27,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy.optimize import brentq
 
 from rbhyst.model.hysteresis import ALPHA, BETA1, BETA2, F0, GAMMA1, GAMMA2, GAMMA3, KB
 
@@ -78,6 +77,9 @@ def _exponential(b1: float, b2: float, ac: np.ndarray, x: float) -> tuple[float,
     """beta1, beta2 of the springs whose sum_i beta1 (exp(beta2 x |c_i|) - 1) |c_i| is the set's
     beta1 (exp(|beta2| x) - 1) at x and x / 2 (the term grows on the side where beta2 u > 0: a
     spring whose line is against the motion bears it on the other branch, of the opposite sign)."""
+    # (imported here: a run without an MSS of such a set loads no scipy)
+    from scipy.optimize import brentq
+
     k0 = abs(b2)
 
     def of(k, y):

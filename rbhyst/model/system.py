@@ -842,6 +842,8 @@ def _set_stiffnesses(deck: dk.Deck) -> tuple[dict, dict, dict]:
 def _mss_sets(deck: dk.Deck, sets: dict) -> dict:
     """The springs' sets of the deck's MSS isolators (rbhyst.model.mss.spring_set), by the names
     their elements give (InputError where a set with an exponential term has no reference)."""
+    if not any(iso.coupling == "mss" for iso in deck.isolators or []):
+        return {}
     from rbhyst.model.isolators import mss_set_name
     from rbhyst.model.mss import DEFAULT_SPRINGS, spring_set
 

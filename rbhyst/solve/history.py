@@ -75,14 +75,16 @@ def shear_lines(system) -> list[tuple[int, list[int], np.ndarray]]:
     """Each MSS isolator (rbhyst.model.mss) as (its deck number, its springs' output elements
     (0-based, the first of its ``count``), (2, n) the cosines of their lines to its two shear
     lines); empty where there are none."""
-    from rbhyst.model.mss import spring_cosines
-
     groups: dict[int, list[int]] = {}
     k = 0
     for el in system.elements:
         if el.role is not None and el.role.startswith("mss"):
             groups.setdefault(el.isolator, []).append(k)
         k += el.count
+    if not groups:
+        return []
+    from rbhyst.model.mss import spring_cosines
+
     return [(iso, cols, np.array(spring_cosines(len(cols)))) for iso, cols in groups.items()]
 
 
