@@ -151,32 +151,41 @@ def isolator_problems(iso, n: int, key: str) -> list[str]:
                          for k in ("shear1", "shear2") if getattr(sets, k) is None]
         problems += _coupling_problems(iso, key)
     else:
-        if iso.axial is not None:
-            problems.append(f"{key}.axial: the deck is in the plane (2-D): give the axial line as axial_deg from x1 "
-                            "(counterclockwise)")
-        elif iso.axial_deg is None:
-            problems.append(f"{key}.axial_deg: required key is missing")
-        if iso.shear is not None:
-            problems.append(f"{key}.shear: the deck is in the plane (2-D): give the shear line as shear_deg from "
-                            "x1, or leave it out (axial_deg +- 90)")
-        if iso.axial_deg is not None and iso.shear_deg is not None:
-            off = abs((iso.shear_deg - iso.axial_deg) % 180.0 - 90.0)
-            if off > tol:
-                problems.append(f"{key}.shear_deg: {iso.shear_deg:g} is {90.0 - off:.4g} deg from axial_deg = "
-                                f"{iso.axial_deg:g}: the shear line is perpendicular to the axial line (within "
-                                f"{tol:g} deg)")
-        for group, name in ((sets, "hysteresis"), (strokes, "stroke")):
-            if group is None:
-                continue
-            problems += [f"{key}.{name}.{k}: the deck is in the plane (2-D): an isolator has one shear line there "
-                         f"(`shear`)" for k in ("shear1", "shear2") if getattr(group, k) is not None]
-        if sets.shear is None and sets.shear1 is None and sets.shear2 is None:
-            problems.append(f"{key}.hysteresis.shear: required key is missing")
-        if iso.coupling == "mss":
-            problems.append(f"{key}.coupling: \"mss\" couples two shear lines: an isolator in the plane (2-D) has "
-                            "one; leave it out (\"none\")")
-        problems += [f"{key}.{k}: goes with coupling = \"mss\" (in space)" for k in ("springs", "reference")
-                     if getattr(iso, k) is not None]
+        problems += _plane_problems(iso, key)
+    return problems
+
+
+def _plane_problems(iso, key: str) -> list[str]:
+    """isolator_problems of an isolator in the plane."""
+    problems: list[str] = []
+    tol = PERPENDICULAR_TOLERANCE_DEG
+    sets, strokes = iso.hysteresis, iso.stroke
+    if iso.axial is not None:
+        problems.append(f"{key}.axial: the deck is in the plane (2-D): give the axial line as axial_deg from x1 "
+                        "(counterclockwise)")
+    elif iso.axial_deg is None:
+        problems.append(f"{key}.axial_deg: required key is missing")
+    if iso.shear is not None:
+        problems.append(f"{key}.shear: the deck is in the plane (2-D): give the shear line as shear_deg from "
+                        "x1, or leave it out (axial_deg +- 90)")
+    if iso.axial_deg is not None and iso.shear_deg is not None:
+        off = abs((iso.shear_deg - iso.axial_deg) % 180.0 - 90.0)
+        if off > tol:
+            problems.append(f"{key}.shear_deg: {iso.shear_deg:g} is {90.0 - off:.4g} deg from axial_deg = "
+                            f"{iso.axial_deg:g}: the shear line is perpendicular to the axial line (within "
+                            f"{tol:g} deg)")
+    for group, name in ((sets, "hysteresis"), (strokes, "stroke")):
+        if group is None:
+            continue
+        problems += [f"{key}.{name}.{k}: the deck is in the plane (2-D): an isolator has one shear line there "
+                     f"(`shear`)" for k in ("shear1", "shear2") if getattr(group, k) is not None]
+    if sets.shear is None and sets.shear1 is None and sets.shear2 is None:
+        problems.append(f"{key}.hysteresis.shear: required key is missing")
+    if iso.coupling == "mss":
+        problems.append(f"{key}.coupling: \"mss\" couples two shear lines: an isolator in the plane (2-D) has "
+                        "one; leave it out (\"none\")")
+    problems += [f"{key}.{k}: goes with coupling = \"mss\" (in space)" for k in ("springs", "reference")
+                 if getattr(iso, k) is not None]
     return problems
 
 
