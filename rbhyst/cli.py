@@ -986,7 +986,7 @@ def make_motion(
     """Spectrum-compatible support motions: one record per axis whose TRS lies within 0.9-1.3 of the RRS.
 
     The records are read by decks and by `rbhyst spectrum` (--units g); exit 3 when a motion
-    cannot be matched, with what would work.
+    cannot be matched, with what would work. Long: its signature is its many options.
     """
     import json
     import shlex

@@ -357,6 +357,12 @@ class Isolator(_Model):
     hysteresis: IsolatorSets
     count: Annotated[int, Field(ge=1)] = 1
     stroke: IsolatorStrokes | None = None
+    #: "mss": the two shear lines are one multiple shear spring (rbhyst.model.mss), in space
+    coupling: Literal["none", "mss"] = "none"
+    #: the MSS's springs (even, at least 4; rbhyst.model.mss.DEFAULT_SPRINGS without)
+    springs: Annotated[int, Field(ge=4)] | None = None
+    #: m: where the MSS's exponential term matches the set's (OpenSees' -lim)
+    reference: PosFloat | None = None
 
     @field_validator("shear", mode="before")
     @classmethod
@@ -905,7 +911,7 @@ KEY_UNITS: dict[tuple[str, ...], str] = {
     ("elements", "stroke"): "m", ("dampers", "c"): "N s/m",
     **{("isolators", name): unit for name, unit in (
         ("axial_deg", "°"), ("shear_deg", "°"), ("point", "m"), ("count", ""), ("vertex", ""), ("part", ""),
-        ("axial", ""), ("shear", ""))},
+        ("axial", ""), ("shear", ""), ("coupling", ""), ("springs", ""), ("reference", "m"))},
     **{("isolators", "stroke", name): "m" for name in ("axial", "shear", "shear1", "shear2")},
     **{(*group, "*", name): unit for group in (("excitation", "support"), ("excitation", "force"))
        for name, unit in (("amplitude", "signal"), ("scale", ""), ("frequency_hz", "Hz"), ("phase_deg", "°"),

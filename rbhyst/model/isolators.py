@@ -149,28 +149,62 @@ def isolator_problems(iso, n: int, key: str) -> list[str]:
         if sets.shear is None:
             problems += [f"{key}.hysteresis.{k}: required key is missing (or one `shear` set for both shear lines)"
                          for k in ("shear1", "shear2") if getattr(sets, k) is None]
+        problems += _coupling_problems(iso, key)
     else:
-        if iso.axial is not None:
-            problems.append(f"{key}.axial: the deck is in the plane (2-D): give the axial line as axial_deg from x1 "
-                            "(counterclockwise)")
-        elif iso.axial_deg is None:
-            problems.append(f"{key}.axial_deg: required key is missing")
-        if iso.shear is not None:
-            problems.append(f"{key}.shear: the deck is in the plane (2-D): give the shear line as shear_deg from "
-                            "x1, or leave it out (axial_deg +- 90)")
-        if iso.axial_deg is not None and iso.shear_deg is not None:
-            off = abs((iso.shear_deg - iso.axial_deg) % 180.0 - 90.0)
-            if off > tol:
-                problems.append(f"{key}.shear_deg: {iso.shear_deg:g} is {90.0 - off:.4g} deg from axial_deg = "
-                                f"{iso.axial_deg:g}: the shear line is perpendicular to the axial line (within "
-                                f"{tol:g} deg)")
-        for group, name in ((sets, "hysteresis"), (strokes, "stroke")):
-            if group is None:
-                continue
-            problems += [f"{key}.{name}.{k}: the deck is in the plane (2-D): an isolator has one shear line there "
-                         f"(`shear`)" for k in ("shear1", "shear2") if getattr(group, k) is not None]
-        if sets.shear is None and sets.shear1 is None and sets.shear2 is None:
-            problems.append(f"{key}.hysteresis.shear: required key is missing")
+        problems += _plane_problems(iso, key)
+    return problems
+
+
+def _plane_problems(iso, key: str) -> list[str]:
+    """isolator_problems of an isolator in the plane."""
+    problems: list[str] = []
+    tol = PERPENDICULAR_TOLERANCE_DEG
+    sets, strokes = iso.hysteresis, iso.stroke
+    if iso.axial is not None:
+        problems.append(f"{key}.axial: the deck is in the plane (2-D): give the axial line as axial_deg from x1 "
+                        "(counterclockwise)")
+    elif iso.axial_deg is None:
+        problems.append(f"{key}.axial_deg: required key is missing")
+    if iso.shear is not None:
+        problems.append(f"{key}.shear: the deck is in the plane (2-D): give the shear line as shear_deg from "
+                        "x1, or leave it out (axial_deg +- 90)")
+    if iso.axial_deg is not None and iso.shear_deg is not None:
+        off = abs((iso.shear_deg - iso.axial_deg) % 180.0 - 90.0)
+        if off > tol:
+            problems.append(f"{key}.shear_deg: {iso.shear_deg:g} is {90.0 - off:.4g} deg from axial_deg = "
+                            f"{iso.axial_deg:g}: the shear line is perpendicular to the axial line (within "
+                            f"{tol:g} deg)")
+    for group, name in ((sets, "hysteresis"), (strokes, "stroke")):
+        if group is None:
+            continue
+        problems += [f"{key}.{name}.{k}: the deck is in the plane (2-D): an isolator has one shear line there "
+                     f"(`shear`)" for k in ("shear1", "shear2") if getattr(group, k) is not None]
+    if sets.shear is None and sets.shear1 is None and sets.shear2 is None:
+        problems.append(f"{key}.hysteresis.shear: required key is missing")
+    if iso.coupling == "mss":
+        problems.append(f"{key}.coupling: \"mss\" couples two shear lines: an isolator in the plane (2-D) has "
+                        "one; leave it out (\"none\")")
+    problems += [f"{key}.{k}: goes with coupling = \"mss\" (in space)" for k in ("springs", "reference")
+                 if getattr(iso, k) is not None]
+    return problems
+
+
+def _coupling_problems(iso, key: str) -> list[str]:
+    """What is wrong with an isolator's coupling keys in space, one line per key."""
+    if iso.coupling != "mss":
+        return [f"{key}.{k}: goes with coupling = \"mss\"" for k in ("springs", "reference")
+                if getattr(iso, k) is not None]
+    problems = []
+    if iso.springs is not None and iso.springs % 2:
+        problems.append(f"{key}.springs: {iso.springs}: an even number (a spring along each shear line), 4 or more")
+    sets = iso.hysteresis
+    if sets.shear is None and sets.shear1 != sets.shear2:
+        problems.append(f"{key}.hysteresis.shear2: {sets.shear2!r} is not shear1's {sets.shear1!r}: a multiple "
+                        "shear spring has one behaviour in its plane; give one `shear` set")
+    strokes = iso.stroke
+    if strokes is not None:
+        problems += [f"{key}.stroke.{k}: not with coupling = \"mss\" (its shear is one deformation in the plane, "
+                     "not two)" for k in ("shear", "shear1", "shear2") if getattr(strokes, k) is not None]
     return problems
 
 
@@ -197,6 +231,8 @@ def expand(iso, n: int, element_cls) -> list[tuple[object, str]]:
     if n == 3:
         shear = iso.shear if iso.shear is not None else default_shear(iso.axial)
         lines = (list(iso.axial), list(shear[0]), list(shear[1]))
+        if iso.coupling == "mss":
+            return _expand_mss(iso, place, lines, element_cls, pick(strokes, "axial"))
         for role, line in zip(ROLES_SPACE, lines):
             stroke = pick(strokes, role)
             out.append((element_cls(**place, direction=line, hysteresis=pick(sets, role), count=iso.count,
@@ -207,4 +243,27 @@ def expand(iso, n: int, element_cls) -> list[tuple[object, str]]:
             stroke = pick(strokes, role)
             out.append((element_cls(**place, angle_deg=angle, hysteresis=pick(sets, role), count=iso.count,
                                     **({"stroke": stroke} if stroke is not None else {})), role))
+    return out
+
+
+def mss_set_name(name: str, springs: int, reference: float | None) -> str:
+    """The name of the springs' set of an MSS of set ``name`` (rbhyst.model.mss.spring_set): what
+    the kernels' rows and the summary's elements call it."""
+    return f"{name} (mss {springs}" + (f", {reference:g} m)" if reference is not None else ")")
+
+
+def _expand_mss(iso, place, lines, element_cls, axial_stroke) -> list[tuple[object, str]]:
+    """An MSS isolator's elements: the axial one, then its springs at pi i / n from shear line 1
+    towards shear line 2 (roles mss1 .. mssn), each of the springs' set."""
+    from rbhyst.model.mss import DEFAULT_SPRINGS, spring_cosines, spring_label
+
+    n = iso.springs or DEFAULT_SPRINGS
+    sets = iso.hysteresis
+    name = mss_set_name(sets.shear or sets.shear1, n, iso.reference)
+    out = [(element_cls(**place, direction=lines[0], hysteresis=sets.axial, count=iso.count,
+                        **({"stroke": axial_stroke} if axial_stroke is not None else {})), "axial")]
+    s1, s2 = _unit(lines[1]), _unit(lines[2])
+    for i, (c, s) in enumerate(zip(*spring_cosines(n)), start=1):
+        out.append((element_cls(**place, direction=_clean(c * s1 + s * s2), hysteresis=name, count=iso.count),
+                    spring_label(i)))
     return out

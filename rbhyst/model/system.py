@@ -816,6 +816,8 @@ def _row_groups(keyed: np.ndarray, deck: dk.Deck) -> tuple[list[int], np.ndarray
     the order of their first elements; each element's row)."""
     key = np.round(keyed / 1e-12).astype(np.int64)
     set_ids = {name: i for i, name in enumerate(deck.hysteresis)}
+    for el in deck.all_elements:  # (the springs' sets of MSS isolators, after the deck's)
+        set_ids.setdefault(el.hysteresis, len(set_ids))
     # (a dictionary of the keys: numpy's unique of rows went through a sort of a structured
     # view, a tenth of a sweep case's assembly for a few elements)
     rows: dict[tuple, int] = {}
@@ -833,6 +835,7 @@ def _set_stiffnesses(deck: dk.Deck) -> tuple[dict, dict, dict]:
     """Each hysteresis set as its array, its stiffness at a reversal at u = 0 (InputError where
     it is not positive) and k0, the larger slope of its limiting curves at u = 0."""
     sets = {name: hs.array() for name, hs in deck.hysteresis.items()}
+    sets.update(_mss_sets(deck, sets))
     k_rev, k_el = {}, {}
     for name, p in sets.items():
         k, k_el[name], _ = stiffnesses_at_zero(p)
@@ -840,6 +843,31 @@ def _set_stiffnesses(deck: dk.Deck) -> tuple[dict, dict, dict]:
             raise InputError(f"hysteresis.{name}: the stiffness at a reversal at u = 0 is {k:.6g} N/m; it must be > 0")
         k_rev[name] = k
     return sets, k_rev, k_el
+
+
+def _mss_sets(deck: dk.Deck, sets: dict) -> dict:
+    """The springs' sets of the deck's MSS isolators (rbhyst.model.mss.spring_set), by the names
+    their elements give (InputError where a set with an exponential term has no reference)."""
+    if not any(iso.coupling == "mss" for iso in deck.isolators or []):
+        return {}
+    from rbhyst.model.isolators import mss_set_name
+    from rbhyst.model.mss import DEFAULT_SPRINGS, spring_set
+
+    out, problems = {}, []
+    for k, iso in enumerate(deck.isolators or [], start=1):
+        if iso.coupling != "mss" or not (iso.hysteresis.shear or iso.hysteresis.shear1) in sets:
+            continue
+        name = iso.hysteresis.shear or iso.hysteresis.shear1
+        n = iso.springs or DEFAULT_SPRINGS
+        try:
+            out[mss_set_name(name, n, iso.reference)] = spring_set(sets[name], n, iso.reference)
+        except ValueError:
+            problems.append(f"isolators[{k}].reference: required with coupling = \"mss\" and set {name!r}, which "
+                            "has an exponential term (beta1, beta2): the largest shear deformation the scene "
+                            "reaches (m), where the springs' force matches the set's")
+    if problems:
+        raise InputError(problems)
+    return out
 
 
 def stiffnesses_at_zero(p: np.ndarray) -> tuple[float, float, float]:

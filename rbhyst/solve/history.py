@@ -71,6 +71,23 @@ def rows_times(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return out
 
 
+def shear_lines(system) -> list[tuple[int, list[int], np.ndarray]]:
+    """Each MSS isolator (rbhyst.model.mss) as (its deck number, its springs' output elements
+    (0-based, the first of its ``count``), (2, n) the cosines of their lines to its two shear
+    lines); empty where there are none."""
+    groups: dict[int, list[int]] = {}
+    k = 0
+    for el in system.elements:
+        if el.role is not None and el.role.startswith("mss"):
+            groups.setdefault(el.isolator, []).append(k)
+        k += el.count
+    if not groups:
+        return []
+    from rbhyst.model.mss import spring_cosines
+
+    return [(iso, cols, np.array(spring_cosines(len(cols)))) for iso, cols in groups.items()]
+
+
 class Layout:
     """Which columns a scene's table has and how a Raw chunk becomes rows of them."""
 
@@ -109,6 +126,12 @@ class Layout:
         self.slices["elements"] = slice(len(names), len(names) + 2 * n_el)
         for k in range(1, n_el + 1):
             names += [f"e{k}_u_m", f"e{k}_f_N"]
+        # an MSS isolator's shear lines: deformation and the springs' resultant along each
+        self._shear = shear_lines(system)
+        if self._shear:
+            self.slices["shear"] = slice(len(names), len(names) + 4 * len(self._shear))
+            for k, _, _ in self._shear:
+                names += [f"iso{k}_shear{j}_{q}" for j in (1, 2) for q in ("u_m", "f_N")]
         if self.dampers:
             n_d = len(system.damper_c)
             self.slices["dampers"] = slice(len(names), len(names) + 2 * n_d)
@@ -259,6 +282,8 @@ class Layout:
         el = self.slices["elements"]
         out[:, el.start:el.stop:2] = raw.u[:, self._expand]
         out[:, el.start + 1:el.stop:2] = raw.f[:, self._expand]
+        if self._shear:
+            self._shear_columns(out)
         if self.dampers:
             dv = rows_times(raw.v, self._db) if not self._turning else np.repeat(
                 np.einsum("kdi,ki->kd", self._drows(raw), raw.v), self._dcount, axis=1)
@@ -272,6 +297,19 @@ class Layout:
             out[:, en.start + 3] = raw.e[:, 3]
             error = error - raw.e[:, 3]
         out[:, en.stop - 1] = error
+
+    def _shear_columns(self, out: np.ndarray) -> None:
+        """The shear lines' columns from their springs' (written before): u_j = (2 / n) sum_i c_ij
+        u_i (sum_i c_ij^2 = n / 2: the projection back), f_j = sum_i c_ij f_i."""
+        el = self.slices["elements"].start
+        first = self.slices["shear"].start
+        for m, (_, springs, weights) in enumerate(self._shear):
+            u = out[:, [el + 2 * c for c in springs]]
+            f = out[:, [el + 2 * c + 1 for c in springs]]
+            n = len(springs)
+            for j in range(2):
+                out[:, first + 4 * m + 2 * j] = (2.0 / n) * (u @ weights[j])
+                out[:, first + 4 * m + 2 * j + 1] = f @ weights[j]
 
     def _drows(self, raw: Raw) -> np.ndarray:
         """(k, dampers, n) the dampers' rows at each row's configuration (exact kinematics)."""
