@@ -75,12 +75,18 @@ def estimated_run(system: System, settings, keep: bool = True, csv=None, planned
 
 
 def companion_of(planned):
-    """(plan, tap) where the run's error can come from its companion (rbhyst.solve.companion)."""
+    """(plan, tap) where the run's error can come from its companion (rbhyst.solve.companion): a
+    tap of the whole run's rows, or for a long run one that steps the companion alongside it
+    (rbhyst.solve.alongside: its memory a chunk's)."""
     from rbhyst.solve import companion
-    from rbhyst.solve.plan import FixedStepPlan
+    from rbhyst.solve.plan import FixedStepPlan, compare_stride
 
     if not isinstance(planned, FixedStepPlan) or companion.unfit(planned) is not None:
         return None
+    if companion.whole_run_bytes(planned) > companion.WHOLE_RUN_BYTES:
+        from rbhyst.solve.alongside import Alongside
+
+        return planned, Alongside(planned, compare_stride(planned.layout, planned.compute_steps))
     return planned, companion.RunTap(planned)
 
 

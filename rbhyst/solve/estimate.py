@@ -334,8 +334,13 @@ def _from_companion(result, settings, plan, tap, spare_core: bool = False, scree
     scales = error_scales(peaks, keys, families, result.system)
     check = CHECK_ABOVE * settings.warn_error
     largest = settings.warn_error if screen else COMPANION_LARGEST  # (a screen's pass past it is run again)
+    streamed = getattr(tap, "streamed", False)  # (stepped alongside the run: rbhyst.solve.alongside)
     beside = spare_core and stats.steps_taken * plan.bvec.shape[0] >= BESIDE_MIN_WORK
-    if beside:
+    if streamed:
+        assert tap.compare_every == result.compare_every, "the companion compares the run's compared nodes"
+        changed, wall = tap.changed()
+        checked = None  # (the probe steps where it is asked for: the run again beside it)
+    elif beside:
         companion = Companion(plan, tap, result.compare_every)
         change = result.layout.largest_change
 
@@ -372,6 +377,8 @@ def _from_companion(result, settings, plan, tap, spare_core: bool = False, scree
         # companion's source added: a determined history moves by that fraction of the error, a
         # sensitive one as much as the run itself (then the adaptive solutions say how much)
         moved, took = checked if checked is not None else (None, 0.0)
+        if streamed:
+            moved, took = tap.probe(COMPANION_PROBE)
         if moved is None:
             return None
         spread = scaled_errors(moved, scales)
