@@ -787,12 +787,10 @@ def make_motion(
     The records are read by decks and by `rbhyst spectrum` (--units g); exit 3 when a motion
     cannot be matched, with what would work.
     """
-    import json
     import shlex
 
     from rbhyst.analyses.qualification import matching
     from rbhyst.analyses.qualification.rrs import requested_rrs
-    from rbhyst.files.outdir import staged_directory
 
     keys = {"rrs": "--rrs", "rrs_x2": "--rrs-x2", "rrs_x3": "--rrs-x3", "damping": "--rrs-damping", "sds": "--sds",
             "z_over_h": "--z-over-h", "level": "--level", "duration": "--duration", "dt": "--dt"}
@@ -817,18 +815,34 @@ def make_motion(
                    "--z-over-h": z_over_h, "--level": level, "--axes": axes if axes != 2 else None,
                    "--duration": duration, "--dt": dt, "--seed": seed, "--table": table}
         mark = f"{MOTION_MARK} " + " ".join(f"{k} {shlex.quote(str(v))}" for k, v in options.items() if v is not None)
-        with staged_directory(out) as tmp:
-            for m in made:
-                for axis in m.records:
-                    (tmp / matching.record_name(m, axis)).write_text(matching.record_text(m, axis, mark),
-                                                                    encoding="utf-8")
-            matching.write_tables(tmp, made)
-            (tmp / "motions.json").write_text(json.dumps(matching.motions_summary(made, spectra, standard), indent=2)
-                                              + "\n", encoding="utf-8")
-            if plots:
-                from rbhyst.report.qualification import plot_trs
+        _write_motions(out, made, spectra, standard, mark, plots)
+    _say_motions(made)
+    say(f"wrote {out}")
 
-                plot_trs(made, spectra, tmp / "trs.png")
+
+def _write_motions(out: Path, made, spectra, standard, mark: str, plots: bool) -> None:
+    """make-motion's folder, written whole or not at all: the records, the tables, motions.json, trs.png."""
+    import json
+
+    from rbhyst.analyses.qualification import matching
+    from rbhyst.files.outdir import staged_directory
+
+    with staged_directory(out) as tmp:
+        for m in made:
+            for axis in m.records:
+                (tmp / matching.record_name(m, axis)).write_text(matching.record_text(m, axis, mark),
+                                                                encoding="utf-8")
+        matching.write_tables(tmp, made)
+        (tmp / "motions.json").write_text(json.dumps(matching.motions_summary(made, spectra, standard), indent=2)
+                                          + "\n", encoding="utf-8")
+        if plots:
+            from rbhyst.report.qualification import plot_trs
+
+            plot_trs(made, spectra, tmp / "trs.png")
+
+
+def _say_motions(made) -> None:
+    """make-motion's lines: every record's TRS, peak and strong motion, every pair's correlation."""
     for m in made:
         for axis, r in m.records.items():
             least = "" if r.check.peak_min is None else f" (at least {r.check.peak_min / 9.80665:.3g} g)"
@@ -846,7 +860,6 @@ def make_motion(
             say(f"motion {m.number}: correlation of {a} and {b} {c:+.3f}; coherence {coherence[pair]['mean']:.3f} "
                 f"on average over {coherence[pair]['band_hz'][0]:.3g}-{coherence[pair]['band_hz'][1]:.3g} Hz "
                 f"(largest {coherence[pair]['max']:.3f})")
-    say(f"wrote {out}")
 
 
 #: the first line of every record make-motion writes

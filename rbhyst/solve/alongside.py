@@ -137,7 +137,7 @@ class Follower:
         cap = rows + 4
         self.x, self.st = plan.initial_state()
         start = plan.start_row(self.x, self.st)
-        self._state = np.ascontiguousarray(self.st[0])  # (a copy: the re-drive's element states)
+        self._state = self.st[0].copy()  # the re-drive's element states (the loop steps st in place)
         # rows of nodes lo .., the node stepped to held (its force may yet be patched) and the one
         # before it (the re-drive's start)
         self.d, self.v = np.empty((cap, n)), np.empty((cap, n))
