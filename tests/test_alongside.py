@@ -89,12 +89,14 @@ def test_the_scenes_reach_the_split_steps_and_the_segments(tmp_path, name, split
     assert (planned.substeps.max() == 14) == (name == "shock split in 14")
 
 
+@pytest.mark.parametrize("beside", [False, True])
 @pytest.mark.parametrize("chunk", [1, 2, 7])
 @pytest.mark.parametrize("name", ["seed", "shock split in 14", "monitor splits"])
-def test_the_estimate_alongside_does_not_depend_on_where_the_chunks_end(tmp_path, monkeypatch, chunk, name):
+def test_the_estimate_alongside_does_not_depend_on_where_the_chunks_end(tmp_path, monkeypatch, chunk, name, beside):
     """Chunks of 1, 2 and 7 compute steps (a first chunk too short for the source's differences,
     whose nodes wait; a piece of the companion across a change of splitting; a turn patched
-    across every chunk's start): the estimate of the whole run's companion, to the bit."""
+    across every chunk's start), the companion and the probe in the run's thread or on one of
+    their own a chunk behind: the estimate of the whole run's companion, to the bit."""
     from rbhyst.results.analysis import analyse, plan, scene
 
     system, settings = scene(rbhyst.load_deck(write_deck(tmp_path, scene_data(name))), integrator="chang")
@@ -103,7 +105,7 @@ def test_the_estimate_alongside_does_not_depend_on_where_the_chunks_end(tmp_path
     _streamed(monkeypatch, True)
     planned = plan(system, settings)
     planned.fine_chunk = chunk
-    streamed = analyse(system, settings, keep=False, planned=planned, spare_core=False).accuracy
+    streamed = analyse(system, settings, keep=False, planned=planned, spare_core=beside).accuracy
     assert "companion" in whole and "companion" in streamed
     assert streamed["estimated_error"] == whole["estimated_error"]
     assert streamed["companion"].get("spread") == whole["companion"].get("spread")

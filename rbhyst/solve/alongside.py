@@ -244,28 +244,67 @@ def _larger(top, new):
     return new if top is None else np.maximum(top, new)
 
 
+class Behind:
+    """A follower fed the chunks of a stepping (plan.chunks' ``into``: ``buffers`` gives the
+    arrays the loop writes a chunk into), on a thread of its own one chunk behind the loop where
+    ``beside`` (two sets of arrays in turn: the loop writes one while the follower reads the
+    other; the kernels let go of Python's lock), else in the loop's thread."""
+
+    def __init__(self, plan, nodes: Nodes, follower: Follower, beside: bool):
+        x, st = plan.initial_state()
+        start = plan.start_row(x, st)
+        self.nodes, self.follower = nodes, follower
+        self._spares = [KeptRows(start, 0, keep=()) for _ in range(2 if beside else 1)]
+        self._turn = 0
+        self._beside = beside
+        self._ahead = None  # the follower's work on the last chunk, where beside
+
+    def buffers(self, node: int, rows: int):
+        return self._spares[self._turn % len(self._spares)].buffers(node, rows)
+
+    def feed(self, load: np.ndarray, raw, levels: np.ndarray) -> None:
+        from rbhyst.solve.beside import Beside
+
+        self.wait()
+        if self._beside:
+            self._ahead = Beside(_follow, self.nodes, self.follower, load, raw, levels, name="rbhyst companion")
+        else:
+            _follow(self.nodes, self.follower, load, raw, levels)
+        self._turn += 1
+
+    def wait(self) -> None:
+        """Until the follower has taken every chunk fed (and raise what it raised)."""
+        ahead, self._ahead = self._ahead, None
+        if ahead is not None:
+            ahead.result()
+
+    @property
+    def nbytes(self) -> int:
+        return sum(a.nbytes for spare in self._spares for a in spare._spare.values())
+
+
 class Alongside:
     """A run's tap (plan.run's ``tap``) that steps its companion alongside it: the estimate of
     rbhyst.solve.companion in a chunk's memory (the module docstring). ``changed()`` after the
-    run, ``probe(eps)`` where the estimate asks for it."""
+    run, ``probe(eps)`` where the estimate asks for it. ``beside``: a core is free for the
+    companion, which then steps on a thread of its own a chunk behind the run."""
 
     streamed = True
 
-    def __init__(self, plan, compare_every: int):
-        self.plan, self.compare_every = plan, compare_every
+    def __init__(self, plan, compare_every: int, beside: bool = False):
+        self.plan, self.compare_every, self.beside = plan, compare_every, beside
         self.rows = max(plan.fine_chunk, plan.nsub)  # (the most compute steps a chunk of the loop's holds)
-        x, st = plan.initial_state()
-        self._spare = KeptRows(plan.start_row(x, st), 0, keep=())  # the run's chunk, written by the loop
         self.nodes = Nodes(plan, self.rows)
         self.companion = Follower(plan, 1.0, True, compare_every, self.rows)
-        self.wall_s = 0.0  # what the tap cost the run: the companion's stepping included
+        self._behind = Behind(plan, self.nodes, self.companion, beside)
+        self.wall_s = 0.0  # what the tap cost the run
 
     def buffers(self, node: int, rows: int):
-        return self._spare.buffers(node, rows)
+        return self._behind.buffers(node, rows)
 
     def __call__(self, load: np.ndarray, raw, levels: np.ndarray) -> None:
         tic = time.perf_counter()
-        _follow(self.nodes, self.companion, load, raw, levels)
+        self._behind.feed(load, raw, levels)
         self.wall_s += time.perf_counter() - tic
 
     def changed(self):
@@ -273,6 +312,9 @@ class Alongside:
         Layout.largest_change gives them, or None where Newton's iterations split a step further
         than the run's or a re-driven force left its element's range; the companion's kernel
         seconds). Raises where the companion's loop failed, as plan.step_through does."""
+        tic = time.perf_counter()
+        self._behind.wait()
+        self.wall_s += time.perf_counter() - tic
         c = self.companion
         assert self.nodes.final and c.node == self.nodes.total - 1, "the run's tap missed compute steps"
         _raise_on(self.plan, c)
@@ -285,13 +327,14 @@ class Alongside:
         where Newton's iterations split a step further than the run's; kernel seconds): the run
         stepped again a chunk at a time (its rows to the bit) with the probe beside it."""
         plan = self.plan
-        nodes = Nodes(plan, self.rows)
         probe = Follower(plan, eps, False, self.compare_every, self.rows)
+        behind = Behind(plan, Nodes(plan, self.rows), probe, self.beside)
         x, st = plan.initial_state()
         wall = 0.0
-        for _, _, _, load, raw, levels, took in plan.chunks(x, st, fine=True, into=self._spare):
+        for _, _, _, load, raw, levels, took in plan.chunks(x, st, fine=True, into=behind):
             wall += took
-            _follow(nodes, probe, load, raw, levels)
+            behind.feed(load, raw, levels)
+        behind.wait()
         _raise_on(plan, probe)
         return (None if probe.split else probe.top), wall + probe.wall
 
@@ -300,8 +343,7 @@ class Alongside:
         """The bytes of the arrays the tap keeps (a chunk's: not the run's)."""
         n = self.nodes
         arrays = [n.t, n.h, n.levels, n.d, n.v, n.a, n.extra, n.offset, n.f, n.load, n._extra_w, n._offset_w, n._near]
-        spare = sum(a.nbytes for a in self._spare._spare.values())
-        return sum(a.nbytes for a in arrays if a is not None) + self.companion.nbytes + spare
+        return sum(a.nbytes for a in arrays if a is not None) + self.companion.nbytes + self._behind.nbytes
 
 
 def _follow(nodes: Nodes, follower: Follower, load, raw, levels) -> None:

@@ -39,6 +39,10 @@ its states are the run's within the run's error, and a step split otherwise woul
 error than the one its source takes out). Where it does not apply (exact kinematics, KR-alpha,
 spectra, a step whose Newton iterations fail in the companion where the run's converged) or
 where its estimate exceeds 20 %, the estimate is the adaptive solutions' (rbhyst.solve.estimate).
+
+The classes here keep the run's rows at every compute node (RunTap), which a short run's
+estimate does in one compiled call; a run whose arrays would pass WHOLE_RUN_BYTES steps its
+companion alongside it instead, a chunk at a time (rbhyst.solve.alongside: the same numbers).
 """
 
 from __future__ import annotations

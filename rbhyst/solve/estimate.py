@@ -317,7 +317,10 @@ def _from_companion(result, settings, plan, tap, spare_core: bool = False, scree
     Python's): the seed deck's estimate 24 -> 11 ms with the rest of the companion's making; the
     check's result is dropped where it is not needed. Without, the companion, the check where
     it is needed and their reductions are one compiled call (companion.estimate_in_one_call:
-    the same numbers to the bit, without some forty calls of Python around them)."""
+    the same numbers to the bit, without some forty calls of Python around them). A long run's
+    companion stepped alongside it (``tap`` an rbhyst.solve.alongside.Alongside): its changes
+    are reduced already, and the check, where it is needed, is the run stepped again with the
+    probe beside it (the same numbers to the bit, in a chunk's memory)."""
     from rbhyst.solve.beside import Beside
     from rbhyst.solve.companion import Companion, estimate_in_one_call
 
