@@ -12,6 +12,7 @@ every tenth row written. A streamed run should peak at the same memory whatever 
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import re
 import subprocess
@@ -37,8 +38,9 @@ def deck_text(rows: int, every: int, estimate: bool) -> str:
     return text.replace("[output]\n", f"[output]\nevery = {every}\n")
 
 
-def peak_of(deck: Path, out: Path) -> tuple[float, float, str]:
-    """(peak RSS in MB, wall s, the run's line of its steps) of one run in its own process."""
+def peak_of(deck: Path, out: Path) -> tuple[float, float, str, str]:
+    """(peak RSS in MB, wall s, the run's line of its steps, what its error was estimated against:
+    the companion, the adaptive solution, none) of one run in its own process."""
     tic = time.perf_counter()
     proc = subprocess.Popen([sys.executable, "-m", "rbhyst", "run", str(deck), "--out", str(out), "--no-plots"],
                             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
@@ -48,7 +50,10 @@ def peak_of(deck: Path, out: Path) -> tuple[float, float, str]:
     if proc.returncode:
         raise SystemExit(f"rbhyst run {deck} ended with {proc.returncode}")
     line = next((s for s in text.splitlines() if " steps in " in s), "")
-    return usage.ru_maxrss / 1024, time.perf_counter() - tic, line.split(";")[0]
+    accuracy = json.loads((out / "summary.json").read_text()).get("accuracy") or {}
+    method = accuracy.get("method", "none")
+    against = "companion" if "companion" in method else "adaptive" if "adaptive" in method else method.split()[0]
+    return usage.ru_maxrss / 1024, time.perf_counter() - tic, line.split(";")[0], against
 
 
 def main() -> None:
@@ -57,14 +62,15 @@ def main() -> None:
     ap.add_argument("--every", type=int, default=1)
     ap.add_argument("--no-estimate-too", action="store_true", help="each also with estimate_error = false")
     a = ap.parse_args()
-    print(f"{'rows':>10} {'every':>5} {'estimate':>8} {'peak RSS MB':>11} {'wall s':>7}  run")
+    print(f"{'rows':>10} {'every':>5} {'estimate':>8} {'against':>9} {'peak RSS MB':>11} {'wall s':>7}  run")
     with tempfile.TemporaryDirectory() as tmp:
         for rows in (int(float(x)) for x in a.rows.split(",")):
             for estimate in (True, False) if a.no_estimate_too else (True,):
                 deck = Path(tmp) / f"m{rows}.toml"
                 deck.write_text(deck_text(rows, a.every, estimate))
-                mb, wall, line = peak_of(deck, Path(tmp) / f"out{rows}")
-                print(f"{rows:>10} {a.every:>5} {str(estimate):>8} {mb:>11.0f} {wall:>7.2f}  {line}", flush=True)
+                mb, wall, line, against = peak_of(deck, Path(tmp) / f"out{rows}")
+                print(f"{rows:>10} {a.every:>5} {str(estimate):>8} {against:>9} {mb:>11.0f} {wall:>7.2f}  {line}",
+                      flush=True)
 
 
 if __name__ == "__main__":

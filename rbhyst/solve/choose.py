@@ -61,7 +61,7 @@ def estimated_run(system: System, settings, keep: bool = True, csv=None, planned
     planned = planned or prepare(system, settings)
     if keep:
         planned.check_size(keep=True)
-    companion = companion_of(planned) if settings.estimate else None
+    companion = companion_of(planned, spare_core) if settings.estimate else None
     result = planned.run(keep=keep, csv=csv, progress=progress, tap=companion and companion[1])
     if settings.estimate:
         if csv is not None:
@@ -74,13 +74,19 @@ def estimated_run(system: System, settings, keep: bool = True, csv=None, planned
     return result
 
 
-def companion_of(planned):
-    """(plan, tap) where the run's error can come from its companion (rbhyst.solve.companion)."""
+def companion_of(planned, spare_core: bool = False):
+    """(plan, tap) where the run's error can come from its companion (rbhyst.solve.companion): a
+    tap of the whole run's rows, or for a long run one that steps the companion alongside it
+    (rbhyst.solve.alongside: its memory a chunk's; on a thread of its own with a ``spare_core``)."""
     from rbhyst.solve import companion
-    from rbhyst.solve.plan import FixedStepPlan
+    from rbhyst.solve.plan import FixedStepPlan, compare_stride
 
     if not isinstance(planned, FixedStepPlan) or companion.unfit(planned) is not None:
         return None
+    if companion.whole_run_bytes(planned) > companion.WHOLE_RUN_BYTES:
+        from rbhyst.solve.alongside import Alongside
+
+        return planned, Alongside(planned, compare_stride(planned.layout, planned.compute_steps), beside=spare_core)
     return planned, companion.RunTap(planned)
 
 

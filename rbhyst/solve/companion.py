@@ -39,6 +39,10 @@ its states are the run's within the run's error, and a step split otherwise woul
 error than the one its source takes out). Where it does not apply (exact kinematics, KR-alpha,
 spectra, a step whose Newton iterations fail in the companion where the run's converged) or
 where its estimate exceeds 20 %, the estimate is the adaptive solutions' (rbhyst.solve.estimate).
+
+The classes here keep the run's rows at every compute node (RunTap), which a short run's
+estimate does in one compiled call; a run whose arrays would pass WHOLE_RUN_BYTES steps its
+companion alongside it instead, a chunk at a time (rbhyst.solve.alongside: the same numbers).
 """
 
 from __future__ import annotations
@@ -53,8 +57,12 @@ from rbhyst.solve.kernels.layout import (ESTIMATE_DONE, ESTIMATE_FAILED, ESTIMAT
 
 #: the methods whose modified equation is written out here
 METHODS = tuple(MODIFIED)
-#: the companion keeps every compute step's deformations: at most this many values
-MAX_VALUES = 20_000_000
+#: a run whose tap and companion would keep more than this many bytes of its compute nodes (the
+#: estimate's arrays of the whole run: whole_run_bytes) steps its companion alongside it instead, a
+#: chunk at a time (rbhyst.solve.alongside: the same numbers in a chunk's memory); below, the whole
+#: run's arrays let the companion and its check be one compiled call (about 80,000 nodes of the
+#: seed deck)
+WHOLE_RUN_BYTES = 32_000_000
 
 
 def unfit(plan) -> str | None:
@@ -70,10 +78,16 @@ def unfit(plan) -> str | None:
         return "the spectra are estimated against the adaptive solution"
     if plan.cm.shape[0] > system.n:
         return "dampers that turn"
-    nodes = plan.compute_steps + 1
-    if nodes * max(plan.bvec.shape[0], system.n) > MAX_VALUES:
-        return "too long a run to keep every step's deformation"
     return None
+
+
+def whole_run_bytes(plan) -> int:
+    """About what the tap and the companion of a whole run keep (RunTap, estimate_in_one_call's
+    arrays): at every compute node its time and level, the run's d, v, f and load, the source,
+    the offset and the accelerations, the companion's rows and load."""
+    n, ne = plan.system.n, plan.bvec.shape[0]
+    per_node = 8 + 7 * n + 4 * ne + 2 * n  # (the load as wide as the coordinates)
+    return 8 * per_node * (plan.compute_steps + 1)
 
 
 class RunTap:

@@ -297,7 +297,10 @@ def _from_companion(result, settings, plan, tap, spare_core: bool = False, scree
     Python's): the seed deck's estimate 24 -> 11 ms with the rest of the companion's making; the
     check's result is dropped where it is not needed. Without, the companion, the check where
     it is needed and their reductions are one compiled call (companion.estimate_in_one_call:
-    the same numbers to the bit, without some forty calls of Python around them)."""
+    the same numbers to the bit, without some forty calls of Python around them). A long run's
+    companion stepped alongside it (``tap`` an rbhyst.solve.alongside.Alongside): its changes
+    are reduced already, and the check, where it is needed, is the run stepped again with the
+    probe beside it (the same numbers to the bit, in a chunk's memory)."""
     from rbhyst.solve.beside import Beside
     from rbhyst.solve.companion import Companion, estimate_in_one_call
 
@@ -314,8 +317,13 @@ def _from_companion(result, settings, plan, tap, spare_core: bool = False, scree
     scales = error_scales(peaks, keys, families, result.system)
     check = CHECK_ABOVE * settings.warn_error
     largest = settings.warn_error if screen else COMPANION_LARGEST  # (a screen's pass past it is run again)
+    streamed = getattr(tap, "streamed", False)  # (stepped alongside the run: rbhyst.solve.alongside)
     beside = spare_core and stats.steps_taken * plan.bvec.shape[0] >= BESIDE_MIN_WORK
-    if beside:
+    if streamed:
+        assert tap.compare_every == result.compare_every, "the companion compares the run's compared nodes"
+        changed, wall = tap.changed()
+        checked = None  # (the probe steps where it is asked for: the run again beside it)
+    elif beside:
         companion = Companion(plan, tap, result.compare_every)
         change = result.layout.largest_change
 
@@ -352,6 +360,8 @@ def _from_companion(result, settings, plan, tap, spare_core: bool = False, scree
         # companion's source added: a determined history moves by that fraction of the error, a
         # sensitive one as much as the run itself (then the adaptive solutions say how much)
         moved, took = checked if checked is not None else (None, 0.0)
+        if streamed:
+            moved, took = tap.probe(COMPANION_PROBE)
         if moved is None:
             return None
         spread = scaled_errors(moved, scales)

@@ -72,6 +72,13 @@ def compute_times(bounds: np.ndarray, substeps: np.ndarray, dt: float) -> np.nda
     return np.concatenate(parts) if parts else np.empty(0)
 
 
+def compare_stride(layout: Layout, compute_steps: int) -> int:
+    """Every how many compute steps a run's estimate compares its columns (time and
+    history.estimate_columns): every one, or as many as keep them within COMPARE_VALUES."""
+    nodes = compute_steps + 1
+    return max(1, -(-nodes * (1 + len(estimate_columns(layout))) // COMPARE_VALUES))
+
+
 class Rows:
     """Where a run's rows go: reductions over every compute step, every ``every``-th output row
     kept or streamed, the columns its error estimate compares at every ``compare_every``-th
@@ -101,8 +108,7 @@ class Rows:
         # the columns the error estimate compares (rbhyst.solve.estimate), at every compare_every-th
         # compute step: where a step of dt is split, its error between the rows is the run's too
         self._compare_columns = np.array([0] + [c for _, c, _ in estimate_columns(layout)])
-        nodes = (compute_steps if compute_steps is not None else n_steps) + 1
-        self.compare_every = compare_every or max(1, -(-nodes * len(self._compare_columns) // COMPARE_VALUES))
+        self.compare_every = compare_every or compare_stride(layout, compute_steps if compute_steps is not None else n_steps)
         self._compared: list[np.ndarray] = []
         self.spectra = None
         if spectra is not None:

@@ -62,6 +62,11 @@ EXPORTS = {
                   "i8(f8[:,::1], i8[:,::1], i8[:,::1], i1[:,::1], f8[::1])"),
     "render": ("rbhyst.solve.kernels.csvfmt", "_render", "i8(f8[:,::1], i8[:,::1], i8[:,::1], i1[:,::1], u1[::1], i8[::1])"),
     "redrive": ("rbhyst.solve.kernels.redrive", "redrive", "i8(f8[:,:,::1], f8[:,::1], f8[:,::1], f8[:,::1])"),
+    "redrive_on": ("rbhyst.solve.kernels.redrive", "redrive_on", "i8(f8[:,:,::1], f8[:,::1], f8[:,::1], f8[:,::1], b1)"),
+    "window_source": ("rbhyst.solve.kernels.modified", "window_source",
+                      "void(i8, f8[:,::1], f8[:,::1], f8[:,::1], f8[::1], f8[:,::1], f8[:,::1], b1, f8[::1], f8[::1], "
+                      "f8[:,::1], f8[::1], f8[::1], f8[::1], f8[:,::1], b1[::1], f8[:,::1], f8[:,::1], f8[::1], f8[::1], "
+                      "f8[::1])"),
     "modified": ("rbhyst.solve.kernels.modified", "source_and_offset",
                  "void(i8, f8[:,::1], f8[:,::1], f8[::1], f8[::1], f8[::1], f8[:,::1], b1, f8[:,::1], b1[::1], "
                  "f8[:,::1], f8[:,::1], f8[::1], f8[::1], f8[::1])"),

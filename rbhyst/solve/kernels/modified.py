@@ -31,6 +31,26 @@ def companion_source(method, load, v, f, a0, rb, c, damped, minv, mass, k0, t, l
     1] take substeps[i] compute steps each, each compute step at its ``levels``; the last node's
     the one before it) and the nodes ``near`` within 1.5 h of a signal's start, end or corner
     (``breaks``), all written into the arrays given."""
+    nn = a.shape[0]
+    i = 0
+    for s in range(substeps.shape[0]):
+        base = dt / substeps[s]
+        for _ in range((bounds[s + 1] - bounds[s]) * substeps[s]):
+            h[i] = math.ldexp(base, -int(levels[i]))  # (exact: a power of two)
+            i += 1
+    h[nn - 1] = h[nn - 2] if nn > 1 else dt
+    window_source(method, load, v, f, a0, rb, c, damped, minv, mass, k0, t, h, breaks, a, near, extra, offset,
+                  d1, d2, w1)
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def window_source(method, load, v, f, a0, rb, c, damped, minv, mass, k0, t, h, breaks, a, near, extra, offset,
+                  d1, d2, w1):
+    """companion_source of consecutive compute nodes with their steps h given: a0 the
+    acceleration at the first (the loop's own where it is node 0, the one this pass found where
+    it is a later window's: rbhyst.solve.alongside). A node with both neighbours in the window
+    gets what it gets from the whole run's, to the bit; the window's ends get the run's ends'
+    one-sided differences."""
     nn, n = a.shape
     ne = f.shape[1]
     for j in range(n):
@@ -47,13 +67,6 @@ def companion_source(method, load, v, f, a0, rb, c, damped, minv, mass, k0, t, l
                     cv += v[i, k] * c[j, k]
                 x -= cv
             a[i, j] = x * minv[j]
-    i = 0
-    for s in range(substeps.shape[0]):
-        base = dt / substeps[s]
-        for _ in range((bounds[s + 1] - bounds[s]) * substeps[s]):
-            h[i] = math.ldexp(base, -int(levels[i]))  # (exact: a power of two)
-            i += 1
-    h[nn - 1] = h[nn - 2] if nn > 1 else dt
     for i in range(nn):
         near[i] = False
         for b in breaks:

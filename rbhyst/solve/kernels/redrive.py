@@ -20,44 +20,73 @@ from rbhyst.solve.kernels.layout import A, F, G, K, S, U
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
+def _drive(params, e, uu, f, s, g, k, a, u, f_out, stop):
+    """Element row e from its state (uu, f, s, g, k, a) at sample 0 of u through samples 1 ..
+    stop - 1, f_out[i, e] each one's force; a sample with one after it in u (u's last is looked
+    at only) has its turn's vertex inserted where it falls. Returns (-1 or the sample at which
+    the element left its calibrated range, the state reached)."""
+    n = u.shape[0]
+    for i in range(1, stop):
+        # the vertex of sample i's parabola, if i turns and the vertex lies before it
+        if i < n - 1:
+            d0 = u[i, e] - u[i - 1, e]
+            d1 = u[i + 1, e] - u[i, e]
+            if d0 * d1 < 0.0:
+                c = u[i - 1, e] - u[i + 1, e]
+                x = 0.5 * c / (d1 - d0)  # its time after sample i, in steps (|x| <= 1/2)
+                peak = u[i, e] - 0.25 * c * x
+                if x < 0.0:
+                    f, s, g, k, a, _, _, ok = vrm_update(params, e, uu, f, s, g, k, a, peak)
+                    if not ok:
+                        return i, uu, f, s, g, k, a
+                    uu = peak
+        f, s, g, k, a, _, _, ok = vrm_update(params, e, uu, f, s, g, k, a, u[i, e])
+        if not ok:
+            return i, uu, f, s, g, k, a
+        uu = u[i, e]
+        f_out[i, e] = f
+        if i < n - 1:
+            d0 = u[i, e] - u[i - 1, e]
+            d1 = u[i + 1, e] - u[i, e]
+            if d0 * d1 < 0.0:
+                c = u[i - 1, e] - u[i + 1, e]
+                x = 0.5 * c / (d1 - d0)
+                if x > 0.0:  # the vertex lies after sample i: drive to it now
+                    peak = u[i, e] - 0.25 * c * x
+                    f, s, g, k, a, _, _, ok = vrm_update(params, e, uu, f, s, g, k, a, peak)
+                    if not ok:
+                        return i, uu, f, s, g, k, a
+                    uu = peak
+    return -1, uu, f, s, g, k, a
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
 def redrive(params, st0, u, f_out):
     """Drive element row e of ``params`` (ne, 2, 8) from its state st0[e] through the samples
     u[:, e] (equally spaced in time), a reversal's vertex inserted between the samples it falls
     between; f_out[i, e] the force at sample i (f_out[0] is st0's). Returns -1, or the sample at
     which an element left its calibrated range."""
-    n = u.shape[0]
     for e in range(u.shape[1]):
-        uu, f, s, g, k, a = st0[e, U], st0[e, F], st0[e, S], st0[e, G], st0[e, K], st0[e, A]
-        f_out[0, e] = f
-        for i in range(1, n):
-            # the vertex of sample i's parabola, if i turns and the vertex lies before it
-            if i < n - 1:
-                d0 = u[i, e] - u[i - 1, e]
-                d1 = u[i + 1, e] - u[i, e]
-                if d0 * d1 < 0.0:
-                    c = u[i - 1, e] - u[i + 1, e]
-                    x = 0.5 * c / (d1 - d0)  # its time after sample i, in steps (|x| <= 1/2)
-                    peak = u[i, e] - 0.25 * c * x
-                    if x < 0.0:
-                        f, s, g, k, a, _, _, ok = vrm_update(params, e, uu, f, s, g, k, a, peak)
-                        if not ok:
-                            return i
-                        uu = peak
-            f, s, g, k, a, _, _, ok = vrm_update(params, e, uu, f, s, g, k, a, u[i, e])
-            if not ok:
-                return i
-            uu = u[i, e]
-            f_out[i, e] = f
-            if i < n - 1:
-                d0 = u[i, e] - u[i - 1, e]
-                d1 = u[i + 1, e] - u[i, e]
-                if d0 * d1 < 0.0:
-                    c = u[i - 1, e] - u[i + 1, e]
-                    x = 0.5 * c / (d1 - d0)
-                    if x > 0.0:  # the vertex lies after sample i: drive to it now
-                        peak = u[i, e] - 0.25 * c * x
-                        f, s, g, k, a, _, _, ok = vrm_update(params, e, uu, f, s, g, k, a, peak)
-                        if not ok:
-                            return i
-                        uu = peak
+        f_out[0, e] = st0[e, F]
+        bad, _, _, _, _, _, _ = _drive(params, e, st0[e, U], st0[e, F], st0[e, S], st0[e, G], st0[e, K], st0[e, A],
+                                       u, f_out, u.shape[0])
+        if bad >= 0:
+            return bad
+    return -1
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def redrive_on(params, state, u, f_out, last):
+    """redrive a window at a time: every element from its ``state`` (ne, >= 6, at sample 0 of u,
+    which is driven already) through samples 1 .. m - 2 of u (m, ne), the last one only looked
+    at (it decides whether m - 2 turns), or through m - 1 where ``last`` (the history's end); the
+    state reached written back. The next window starts at the last sample driven, the one after
+    it next: the same forces, to the bit, as redrive of the whole history. Returns as redrive."""
+    stop = u.shape[0] if last else u.shape[0] - 1
+    for e in range(u.shape[1]):
+        bad, uu, f, s, g, k, a = _drive(params, e, state[e, U], state[e, F], state[e, S], state[e, G], state[e, K],
+                                        state[e, A], u, f_out, stop)
+        if bad >= 0:
+            return bad
+        state[e, U], state[e, F], state[e, S], state[e, G], state[e, K], state[e, A] = uu, f, s, g, k, a
     return -1
