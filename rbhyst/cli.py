@@ -993,6 +993,7 @@ def make_motion(
 
     from rbhyst.analyses.qualification import matching
     from rbhyst.analyses.qualification.rrs import requested_rrs
+    from rbhyst.files.outdir import staged_directory
 
     keys = {"rrs": "--rrs", "rrs_x2": "--rrs-x2", "rrs_x3": "--rrs-x3", "damping": "--rrs-damping", "sds": "--sds",
             "z_over_h": "--z-over-h", "level": "--level", "duration": "--duration", "dt": "--dt"}
