@@ -294,6 +294,11 @@ def resultant_share(df: np.ndarray, directions: np.ndarray, rows: np.ndarray, co
     return float(share[j]), keys[j]
 
 
+#: a rotation below this (rad) is rounding (a nanometre at a metre): small and exact kinematics
+#: cannot differ by anything but rounding, whatever share of a column at rest it is
+ROUNDING_ROTATION = 1e-9
+
+
 def kinematics_warning(kinematics: dict | None, warn_error: float, result=None) -> list[str]:
     """One warning where the small rotations cost more than warn_error (or may, where it was
     not computed), with the numbers and what to do; the columns that matter first, in their
@@ -303,6 +308,8 @@ def kinematics_warning(kinematics: dict | None, warn_error: float, result=None) 
     if not kinematics or kinematics.get("model") != "small" or "max_rotation_rad" not in kinematics:
         return []
     theta = kinematics["max_rotation_rad"]
+    if theta < ROUNDING_ROTATION:  # a body at rest to rounding: the terms of order theta^2 are nothing
+        return []
     diff = kinematics.get("difference")
     if diff:
         over = ranked(diff, warn_error, *family_terms(diff, result))
