@@ -55,33 +55,35 @@ def late_peaks(extremes: dict, after_s: float) -> list[tuple[str, float]]:
     tail raised no peak at all, the rule met without the rows; some means it may have."""
     peaks = {}
     for column, e in extremes.items():
-        if column.startswith(_NOT_RESPONSE) or "max" not in e:
-            continue
-        hi, lo = abs(e["max"]), abs(e["min"])
-        peaks[column] = (hi, e["time_of_max_s"]) if hi >= lo else (lo, e["time_of_min_s"])
-    largest: dict[str, float] = {}
-    for column, (value, _) in peaks.items():
-        largest[_unit(column)] = max(largest.get(_unit(column), 0.0), value)
-    return [(column, t) for column, (value, t) in peaks.items()
-            if t > after_s and value > _AT_REST * largest[_unit(column)]]
+        if "max" in e:
+            hi, lo = abs(e["max"]), abs(e["min"])
+            peaks[column] = (hi, e["time_of_max_s"]) if hi >= lo else (lo, e["time_of_min_s"])
+    moving = _moving({c: p for c, (p, _) in peaks.items()})
+    return [(c, peaks[c][1]) for c in moving if peaks[c][1] > after_s]
 
 
 def grown(time: np.ndarray, columns: dict[str, np.ndarray], split_s: float,
           tolerance: float) -> list[tuple[str, float]]:
     """The response columns whose peak |value| after ``split_s`` exceeds the one before by more
-    than ``tolerance`` of it, with their growth; columns at rest (their peak below _AT_REST of
-    the largest in their unit) left out."""
+    than ``tolerance`` of it, with their growth; columns at rest left out."""
     before = time <= split_s
-    peaks = {}
-    for column, x in columns.items():
-        if column.startswith(_NOT_RESPONSE):
-            continue
-        peaks[column] = (float(np.max(np.abs(x[before]), initial=0.0)), float(np.max(np.abs(x), initial=0.0)))
+    whole = {c: float(np.max(np.abs(x), initial=0.0)) for c, x in columns.items()}
+    out = []
+    for c in _moving(whole):
+        first = float(np.max(np.abs(columns[c][before]), initial=0.0))
+        if whole[c] > first * (1.0 + tolerance):
+            out.append((c, whole[c] / first - 1.0 if first > 0.0 else math.inf))
+    return out
+
+
+def _moving(peaks: dict[str, float]) -> list[str]:
+    """The response columns of ``peaks`` (column -> peak |value|) not at rest: not the ground's
+    nor an accumulating energy, and with a peak above _AT_REST of the largest in their unit."""
+    response = {c: p for c, p in peaks.items() if not c.startswith(_NOT_RESPONSE)}
     largest: dict[str, float] = {}
-    for column, (_, whole) in peaks.items():
-        largest[_unit(column)] = max(largest.get(_unit(column), 0.0), whole)
-    return [(column, whole / first - 1.0 if first > 0.0 else math.inf) for column, (first, whole) in peaks.items()
-            if whole > first * (1.0 + tolerance) and whole > _AT_REST * largest[_unit(column)]]
+    for c, p in response.items():
+        largest[_unit(c)] = max(largest.get(_unit(c), 0.0), p)
+    return [c for c, p in response.items() if p > _AT_REST * largest[_unit(c)]]
 
 
 #: the units' suffixes of the output columns, longest first

@@ -398,11 +398,11 @@ STRONG_TRIES = 3
 def _within_table(r: RRS, axis: str, duration: float, dt: float, plateau: float, noise: tuple, table) -> Record:
     """A record of one axis within the table's limits (rbhyst.analyses.qualification.table): its
     high-pass raised step by step until it fits; the one that comes nearest where none does."""
-    from rbhyst.analyses.qualification.table import G as _G, HIGH_PASS_STEPS, MARGIN as TABLE_MARGIN
+    from rbhyst.analyses.qualification.table import HIGH_PASS_STEPS, MARGIN as TABLE_MARGIN
 
     if table is None:
         return _matched_record(r, axis, duration, dt, plateau, noise)
-    cap = None if table.acceleration is None else table.acceleration * _G * (1.0 - 2.0 * TABLE_MARGIN)
+    cap = None if table.acceleration is None else table.acceleration * G * (1.0 - 2.0 * TABLE_MARGIN)
     best, best_excess = None, math.inf
     for hp in HIGH_PASS_STEPS:
         rec = _matched_record(r, axis, duration, dt, plateau, noise, hp, cap)

@@ -17,9 +17,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from rbhyst.analyses.qualification.rrs import G
 from rbhyst.errors import InputError
-
-G = 9.80665
 #: the high-pass corners tried, in multiples of the lowest checked frequency (0.5: the default,
 #: content from a quarter of it)
 HIGH_PASS_STEPS = (0.5, 0.6, 0.7, 0.85, 1.0, 1.15, 1.3)

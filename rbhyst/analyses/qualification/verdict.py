@@ -548,6 +548,17 @@ def _accuracy(runs: list[tuple[str, dict]], warn_error: float) -> dict:
             "rule": "every run's largest estimated error at most analysis.warn_error and not sensitive"}
 
 
+def accuracy_lines(acc: dict) -> list[str]:
+    """The line a verdict says where a run cannot vouch for its accuracy (``_accuracy``'s dict)."""
+    if acc["pass"]:
+        return []
+    worst = acc["estimated_error"]
+    return ["fail: a run cannot vouch for its accuracy: " +
+            ("no error estimate" if worst is None else
+             f"estimated error {100 * worst:.2g} % (at most {100 * acc['warn_error']:g} %)") +
+            "; a smaller --dt or --tolerance, or no --integrator (rbhyst then chooses the step), would bring it within"]
+
+
 def verdict_lines(v: Verdict) -> list[str]:
     """The console's account: each failed criterion, the least margin, and the verdict."""
     d = v.data
@@ -574,13 +585,7 @@ def verdict_lines(v: Verdict) -> list[str]:
         lines.append("fail: a motion's strong motion is shorter than the RRS asks for (qualification.json, "
                      "motions.<k>.axes or .strong_motion)")
     acc = d["accuracy"]
-    if not acc["pass"]:
-        worst = acc["estimated_error"]
-        lines.append("fail: a run cannot vouch for its accuracy: " +
-                     ("no error estimate" if worst is None else
-                      f"estimated error {100 * worst:.2g} % (at most {100 * acc['warn_error']:g} %)") +
-                     "; a smaller --dt or --tolerance, or no --integrator (rbhyst then chooses the step), "
-                     "would bring it within")
+    lines += accuracy_lines(acc)
     for w in d["warnings"]:
         lines.append(f"fail: warning: {w}")
     least = min(v.criteria, key=lambda c: c["margin"]) if v.criteria else None

@@ -25,6 +25,7 @@ from rbhyst.analyses.qualification.rrs import PLANE_AXES, SPACE_AXES
 from rbhyst.analyses.qualification.verdict import (
     Verdict,
     _accuracy,
+    accuracy_lines,
     _criteria,
     _deck_with_motion,
     _limit_problems,
@@ -296,17 +297,12 @@ def verdict_lines(v: Verdict) -> list[str]:
         lines.append(f"note: a later shock's peaks differ from the first's by {100 * most:.2g} % at most ({run}): "
                      "what the shock before left (the mounts' hysteresis, a free vibration not yet decayed), "
                      "over the output rows")
-    acc = d["accuracy"]
-    if not acc["pass"]:
-        worst = acc["estimated_error"]
-        lines.append("fail: a run cannot vouch for its accuracy: " +
-                     ("no error estimate" if worst is None else
-                      f"estimated error {100 * worst:.2g} % (at most {100 * acc['warn_error']:g} %)"))
+    lines += accuracy_lines(d["accuracy"])
     lines += [f"fail: warning: {w}" for w in d["warnings"]]
     w = d["worst"]
     tail = "" if w is None else f"; least margin {w['margin']:.3g} ({w['criterion']}, run {w['run']})"
     n = len(d["criteria"])
-    est = acc["estimated_error"]
+    est = d["accuracy"]["estimated_error"]
     lines.append(f"verdict: {'pass' if v.passed else 'fail'}: {len(d['runs'])} runs of {d['drive']['shocks_per_direction']} "
                  f"shock{'s' * (d['drive']['shocks_per_direction'] != 1)}, {n} criteria, "
                  f"{sum(c['pass'] for c in d['criteria'])} within capacity{tail}; estimated error "
