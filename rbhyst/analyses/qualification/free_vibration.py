@@ -23,10 +23,6 @@ import math
 
 import numpy as np
 
-RULE = ("each run goes on after its motion for max(2 s, 10 periods of the initial system's lowest mode); the "
-        "response has decayed when the second half of that free vibration raises no peak by more than "
-        "analysis.warn_error, else the tail is doubled and the run made again (at most 3 runs); the peaks include "
-        "the free vibration")
 #: the tail after a motion: at least this long (s) ...
 TAIL_MIN_S = 2.0
 #: ... and this many periods of the lowest mode
@@ -35,6 +31,11 @@ TAIL_PERIODS = 10.0
 TAIL_GROWTH = 2.0
 #: ... at most this many times in all
 TAIL_TRIES = 3
+#: the rule as qualification.json states it
+RULE = (f"each run goes on after its motion for max({TAIL_MIN_S:g} s, {TAIL_PERIODS:g} periods of the initial "
+        "system's lowest mode); the response has decayed when the second half of that free vibration raises no "
+        f"peak by more than analysis.warn_error, else the tail is multiplied by {TAIL_GROWTH:g} and the run made "
+        f"again (at most {TAIL_TRIES} runs); the peaks include the free vibration")
 #: the columns a run's decay is judged on are its response's: not the ground's input, nor the
 #: energies that accumulate (their largest value is always their last)
 _NOT_RESPONSE = ("ag", "E_input", "E_hysteretic", "E_error", "E_damping")
