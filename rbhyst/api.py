@@ -164,11 +164,11 @@ def write(result: Result, out: str | Path, plots: bool = True) -> Path:
 
 
 def _write_rest(result: Result, folder: Path, plots: bool, before_drawing=None) -> None:
-    from rbhyst.results.writers import write_spectra_csv, write_summary
+    from rbhyst.results.writers import spectra_file, write_spectra_csv, write_summary
 
     write_summary(result, folder / "summary.json")
     if result.spectra is not None:
-        write_spectra_csv(result.spectra, folder / "spectra.csv")
+        write_spectra_csv(result.spectra, folder / spectra_file(result.spectra))
     if plots:
         from rbhyst.report.run import write_plots  # (matplotlib's import)
 

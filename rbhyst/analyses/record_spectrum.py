@@ -81,16 +81,12 @@ def _read(path: Path, units: str, dt: float | None):
     return rec, rec.series.values * ACCEL_UNITS[units]
 
 
-#: the highest default frequency of a shock spectrum, Hz, and the least samples a period
-SRS_TOP_HZ, SRS_SAMPLES_PER_PERIOD = 10_000.0, 10
-
-
 def default_srs_frequencies(dt: float, per_octave: int = 12) -> np.ndarray:
-    """1 Hz to the lesser of 10 kHz and a tenth of the sample rate (ten samples a period of the
-    highest: above it the record's content is shaped by its sampling), ``per_octave`` an octave."""
-    from rbhyst.solve.shock_spectra import octave_frequencies
+    """1 Hz to the lesser of 10 kHz and a tenth of the sample rate (rbhyst.model.periods.srs_range),
+    ``per_octave`` an octave."""
+    from rbhyst.model.periods import octave_frequencies, srs_range
 
-    return octave_frequencies(1.0, max(min(SRS_TOP_HZ, 1.0 / (SRS_SAMPLES_PER_PERIOD * dt)), 2.0), per_octave)
+    return octave_frequencies(*srs_range(dt), per_octave)
 
 
 def record_shock_spectrum(path: Path, units: str, dt: float | None = None, qs=(10.0,),
@@ -100,7 +96,8 @@ def record_shock_spectrum(path: Path, units: str, dt: float | None = None, qs=(1
     1 / (2 Q) for every Q; ``frequencies`` (lowest, highest) Hz at ``per_octave`` an octave
     (default: default_srs_frequencies)."""
     from rbhyst.model.deck import ACCEL_UNITS
-    from rbhyst.solve.shock_spectra import octave_frequencies, shock_spectrum
+    from rbhyst.model.periods import octave_frequencies
+    from rbhyst.solve.shock_spectra import shock_spectrum
 
     problems = [f"--q: {q:g} must be above 0.5 (an underdamped oscillator, damping 1 / (2 Q) below 1)"
                 for q in qs if not (q > 0.5)]

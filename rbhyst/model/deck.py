@@ -642,12 +642,62 @@ Ratio = Annotated[float, Field(ge=0, lt=1)]
 
 class Spectra(_Model):
     """Response spectra of the ground, of G and of every point (see the documentation, "Points of
-    interest and spectra")."""
+    interest and spectra"): ``kind = "sa"`` against period (spectra.csv), or ``"srs"``, the shock
+    response spectrum against frequency in the terms of ISO 18431-4 (srs.csv)."""
 
-    #: damping ratios of the oscillators (a number or a list)
+    #: "sa": max |absolute acceleration| against period; "srs": maximax, positive and negative,
+    #: primary and residual against frequency
+    kind: Literal["sa", "srs"] = "sa"
+    #: damping ratios of the oscillators (a number or a list; kind "sa")
     damping: Annotated[list[Ratio], Field(min_length=1)] = [0.05]
-    #: s; default: 100 periods log-spaced from 0.01 to 10 s
+    #: s; default: 100 periods log-spaced from 0.01 to 10 s (kind "sa")
     periods_s: Annotated[list[PosFloat], Field(min_length=1)] | None = None
+    #: quality factors Q = 1 / (2 damping) (a number or a list; kind "srs"; default 10)
+    q: Annotated[list[Annotated[float, Field(gt=0.5)]], Field(min_length=1)] | None = None
+    #: Hz, [lowest, highest] (kind "srs"; default 1 Hz to the lesser of 10 kHz and a tenth of 1 / analysis.dt)
+    range_hz: Annotated[list[PosFloat], Field(min_length=2, max_length=2)] | None = None
+    #: frequencies an octave over range_hz (kind "srs"; default 12)
+    per_octave: Annotated[int, Field(ge=1)] | None = None
+
+    @field_validator("q", mode="before")
+    @classmethod
+    def _one_q_is_a_list(cls, v):
+        return [v] if isinstance(v, (int, float)) and not isinstance(v, bool) else v
+
+    @field_validator("q")
+    @classmethod
+    def _distinct_qs(cls, v):
+        if v is not None and len(set(v)) != len(v):
+            raise ValueError(f"{v}: each Q once")
+        return v
+
+    @field_validator("range_hz")
+    @classmethod
+    def _ascending(cls, v):
+        if v is not None and not v[1] > v[0]:
+            raise ValueError(f"{v}: [lowest, highest] Hz, the lower first")
+        return v
+
+    @model_validator(mode="after")
+    def _keys_of_the_kind(self):
+        other = (("q", "range_hz", "per_octave") if self.kind == "sa" else ("damping", "periods_s"))
+        wrong = [k for k in other if k in self.model_fields_set]
+        if wrong:
+            raise ValueError(f"{', '.join(wrong)}: not with kind = {self.kind!r} "
+                             + ("(q, range_hz and per_octave are the shock spectrum's: kind = \"srs\")"
+                                if self.kind == "sa" else "(a shock spectrum takes q, range_hz and per_octave)"))
+        return self
+
+    @property
+    def qs(self) -> tuple[float, ...]:
+        return tuple(self.q) if self.q is not None else (10.0,)
+
+    def frequencies(self, dt: float) -> tuple[float, ...]:
+        """kind "srs": ascending, per_octave an octave over range_hz (its default for samples dt apart)."""
+        from rbhyst.model.periods import octave_frequencies, srs_range
+
+        lo, hi = self.range_hz if self.range_hz is not None else srs_range(dt)
+        return tuple(float(f) for f in octave_frequencies(lo, hi, self.per_octave or 12))
 
     @field_validator("damping", mode="before")
     @classmethod
@@ -670,6 +720,8 @@ class Spectra(_Model):
 
     @property
     def dampings(self) -> tuple[float, ...]:
+        if self.kind == "srs":
+            return tuple(1.0 / (2.0 * q) for q in self.qs)
         return tuple(self.damping)
 
     @property
@@ -921,7 +973,8 @@ KEY_UNITS: dict[tuple[str, ...], str] = {
     ("analysis", "dt"): "s", ("analysis", "duration"): "s", ("analysis", "max_omega_dt"): "",
     ("analysis", "max_substep_level"): "", ("analysis", "rtol"): "", ("analysis", "tolerance"): "",
     ("analysis", "warn_error"): "", ("output", "every"): "", ("output", "spectra", "damping"): "",
-    ("output", "spectra", "periods_s"): "s", ("output", "points", "point"): "m",
+    ("output", "spectra", "periods_s"): "s", ("output", "spectra", "q"): "",
+    ("output", "spectra", "range_hz"): "Hz", ("output", "spectra", "per_octave"): "", ("output", "points", "point"): "m",
     ("loops", "amplitude"): "m", ("loops", "frequency_hz"): "Hz", ("loops", "cycles"): "",
     ("loops", "points_per_cycle"): "",
     ("damping", "rayleigh", "ratio"): "", ("damping", "rayleigh", "frequencies_hz"): "Hz",

@@ -35,6 +35,9 @@ class Settings:
     points: tuple[tuple[str, tuple[float, ...]], ...] = ()
     #: output.spectra: (dampings, periods in s) or None for no spectra
     spectra: tuple[tuple[float, ...], tuple[float, ...]] | None = None
+    #: output.spectra.kind: "sa" (response spectra) or "srs" (shock response spectra, the periods
+    #: 1 / their frequencies)
+    spectra_kind: str = "sa"
     #: every step of dt is split into this many times the compute steps the excitation needs:
     #: the refinement rbhyst.solve.choose makes to meet warn_error (rows stay on dt)
     refine: int = 1
@@ -74,5 +77,15 @@ def settings_from_deck(deck, integrator: str | None = None, dt: float | None = N
         warn_error=a.warn_error,
         estimate=a.estimate_error,
         points=tuple((p.name, tuple(p.point)) for p in deck.output.points or ()),
-        spectra=None if deck.output.spectra is None else (deck.output.spectra.dampings, deck.output.spectra.periods),
+        spectra=_spectra(deck.output.spectra, dt or a.dt),
+        spectra_kind="sa" if deck.output.spectra is None else deck.output.spectra.kind,
     )
+
+
+def _spectra(spectra, dt: float):
+    """(dampings, periods) of output.spectra; a shock spectrum's periods are 1 / its frequencies."""
+    if spectra is None:
+        return None
+    if spectra.kind == "srs":
+        return spectra.dampings, tuple(1.0 / f for f in reversed(spectra.frequencies(dt)))
+    return spectra.dampings, spectra.periods

@@ -26,7 +26,8 @@ G = ACCEL_UNITS["g"]  # m/s2 (a g column beside m/s2 only; every value in m/s2 i
 
 #: a run's figures in the order the report shows them (others the folder lists follow)
 RUN_FIGURES = ("support_motion.png", "response_x1.png", "response_x2.png", "response_x3.png", "response_theta1.png",
-               "response_theta2.png", "response_theta3.png", "element_loops.png", "energy.png", "spectra.png")
+               "response_theta2.png", "response_theta3.png", "element_loops.png", "energy.png", "spectra.png",
+               "srs.png", "pvss.png")
 SWEEP_FIGURES = ("ida.png", "vary.png", "motions.png")
 #: the peaks a sweep's statistics table shows (all are in stats.csv)
 SWEEP_PEAKS = ("peak_u1_m", "peak_u2_m", "peak_theta3_rad", "peak_at1_m_s2", "peak_at2_m_s2")
@@ -509,8 +510,26 @@ def peaks_section(s: dict, src: str = "summary.json", title: str = "Peaks and ex
     rows = [[label, num(en.get(key), f"{src}:energy.{key}")] for label, key in
             (("input [J]", "input_J"), ("hysteretic [J]", "hysteretic_J"), ("viscous [J]", "viscous_J")) if key in en]
     out.append("<h3>Energy at the end</h3>" + table(["", ""], rows, {1}))
-    sp = s.get("spectra")
-    if sp:
+    out += _spectra_section(s.get("spectra"), src)
+    out.append("</section>")
+    return "".join(out)
+
+
+def _spectra_section(sp: dict | None, src: str) -> list[str]:
+    """The largest response (or shock response) spectrum of every location and direction."""
+    out: list[str] = []
+    if sp and sp.get("kind") == "srs":
+        rows = [[p["location"], p["direction"], num(p["q"], f"{src}:spectra.peaks.{i}.q"),
+                 num(p["maximax_m_s2"], f"{src}:spectra.peaks.{i}.maximax_m_s2"),
+                 f'<td class="num">{esc(fmt(p["maximax_m_s2"] / G))}</td>',
+                 num(p["frequency_hz"], f"{src}:spectra.peaks.{i}.frequency_hz"),
+                 num(p["pv_m_s"], f"{src}:spectra.peaks.{i}.pv_m_s")] for i, p in enumerate(sp["peaks"])]
+        out.append("<h3>Shock response spectra: largest maximax</h3>"
+                   + table(["location", "direction", "Q", "maximax [m/s2]", "[g]", "at [Hz]", "largest PV [m/s]"],
+                           rows, {2, 3, 4, 5, 6})
+                   + '<p class="muted">Every frequency, with the positive, negative, primary and residual '
+                     'spectra, is in srs.csv.</p>')
+    elif sp:
         rows = [[p["location"], p["direction"], num(p["damping"], f"{src}:spectra.peaks.{i}.damping", "pct"),
                  num(p["sa_m_s2"], f"{src}:spectra.peaks.{i}.sa_m_s2"),
                  f'<td class="num">{esc(fmt(p["sa_m_s2"] / G))}</td>',
@@ -518,8 +537,7 @@ def peaks_section(s: dict, src: str = "summary.json", title: str = "Peaks and ex
         out.append("<h3>Response spectra: largest sa</h3>"
                    + table(["location", "direction", "damping", "sa [m/s2]", "[g]", "at period [s]"], rows,
                            {2, 3, 4, 5}) + '<p class="muted">Every period is in spectra.csv.</p>')
-    out.append("</section>")
-    return "".join(out)
+    return out
 
 
 def _analysis(s: dict) -> str:

@@ -409,7 +409,14 @@ def write_plots(result: Result, out: Path) -> list[str]:
     for name, _ in result.layout.points:
         jobs[f"response_{name}.png"] = partial(plot_point, result, name, out / f"response_{name}.png")
     jobs["element_loops.png"] = partial(plot_element_loops, result, out / "element_loops.png")
-    if result.spectra is not None:
+    if result.spectra is not None and getattr(result.spectra, "kind", "sa") == "srs":
+        from rbhyst.report.shock_spectra import plot_located_pvss
+        from rbhyst.report.spectra import plot_spectra
+
+        jobs["srs.png"] = partial(plot_spectra, result.spectra.maximax_spectra(), out / "srs.png",
+                                  title=result.system.title, shock=True)
+        jobs["pvss.png"] = partial(plot_located_pvss, result.spectra, out / "pvss.png", title=result.system.title)
+    elif result.spectra is not None:
         from rbhyst.report.spectra import plot_spectra
 
         jobs["spectra.png"] = partial(plot_spectra, result.spectra, out / "spectra.png", title=result.system.title)

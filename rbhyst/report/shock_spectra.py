@@ -88,6 +88,58 @@ def plot_pvss(srs: ShockSpectrum, path: Path, title: str = ""):
     return fig
 
 
+@styled
+def plot_located_pvss(spectra, path: Path, title: str = ""):
+    """A run's pseudo-velocity shock spectra (LocatedShockSpectra) on tripartite axes, one panel a
+    direction: the ground in black, G and the points in colour, the first Q (every Q is in
+    srs.csv). Returns the figure (saved to ``path``)."""
+    from rbhyst.report._style import PRINT_WIDTH
+    from rbhyst.solve.located import CENTRE, GROUND
+
+    directions = list(dict.fromkeys(d for _, d in spectra.signals))
+    fig, axes = subplots(len(directions), 1, figsize=(PRINT_WIDTH, 0.9 + 3.6 * len(directions)), squeeze=False)
+    others = [loc for loc in spectra.locations if loc != GROUND]
+    colours = {loc: f"C{i}" for i, loc in enumerate(others)} | {GROUND: "k"}
+    first = spectra.spectra[0]
+    f = first.frequencies_hz
+    lo_f, hi_f = f.min() / 1.5, f.max() * 1.5
+    for ax, direction in zip(axes.flat, directions):
+        # each panel its own range: a direction that hardly moves is read on its own scale
+        pvs = [s.pv[:, 0] for (_, d), s in zip(spectra.signals, spectra.spectra) if d == direction]
+        top = max(float(np.max(v)) for v in pvs)
+        least = min((float(np.min(v[v > 0.0])) for v in pvs if np.any(v > 0.0)), default=top)
+        top = top if top > 0.0 else 1.0
+        lo_v = min(max(top / 1e4, 0.7 * least), 0.5 * SEVERITY_M_S[0][0] / 10.0)
+        hi_v = max(3.0 * top, 2.0 * SEVERITY_M_S[1][0])
+        for loc in spectra.locations:
+            if (loc, direction) not in spectra.signals:
+                continue
+            pv = spectra.of(loc, direction).pv[:, 0]
+            label = "ground" if loc == GROUND else "G (mass centre)" if loc == CENTRE else loc
+            ax.plot(f, np.where(pv > 0.0, pv, np.nan), color=colours[loc], lw={GROUND: 1.6, CENTRE: 2.4}.get(loc, 1.1),
+                    alpha=0.6 if loc == CENTRE else 1.0, label=label, zorder=4)
+        ax.set_xlim(lo_f, hi_f)
+        ax.set_ylim(lo_v, hi_v)
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        _tripartite_grid(ax, lo_f, hi_f, lo_v, hi_v)
+        for v, label in SEVERITY_M_S:
+            ax.axhline(v, color="0.25", lw=1.0, ls="--", zorder=3)
+            ax.text(lo_f * (hi_f / lo_f) ** 0.33, v * 1.04, label, fontsize=7, color="0.25", va="bottom",
+                    bbox={"fc": "white", "ec": "none", "pad": 0.5, "alpha": 0.8}, zorder=5)
+        plain_log_ticks(ax.xaxis)
+        plain_log_ticks(ax.yaxis)
+        ax.grid(False)
+        ax.set_xlabel("natural frequency [Hz]")
+        ax.set_ylabel("pseudo-velocity [m/s]")
+        ax.set_title(f"along {direction}", fontsize=9)
+        ax.legend(fontsize=7, loc="lower center")
+    fig.suptitle(f"Pseudo-velocity shock spectra{': ' + title if title else ''}, Q = {plain_number(first.qs[0])}\n"
+                 "rising lines: constant displacement; falling: constant acceleration", fontsize=9)
+    save(fig, path)
+    return fig
+
+
 def _tripartite_grid(ax, lo_f: float, hi_f: float, lo_v: float, hi_v: float) -> None:
     """Lines of constant displacement D (m) and pseudo-acceleration A (g) at every decade across
     the axes, each labelled where it leaves them."""

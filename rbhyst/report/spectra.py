@@ -44,13 +44,14 @@ def phrase_wrap(line: str, width: int) -> str:
 
 
 @styled
-def plot_spectra(spectra: LocatedSpectra, path: Path, title: str = ""):
+def plot_spectra(spectra: LocatedSpectra, path: Path, title: str = "", shock: bool = False):
     """sa against frequency, log axes, one panel per direction: the ground in black, G and
     the points in colour, one line style per damping (isolation shows as the body's curves
     falling below the ground's above the isolation frequency). A direction with no response
     (below NEGLIGIBLE of the largest) is named in the title instead of drawn; beyond the
     Nyquist frequency of a ground record, where the record has no content, the panel is
-    shaded. Returns the figure (saved to ``path``)."""
+    shaded. ``shock``: the maximax of shock response spectra (LocatedShockSpectra.maximax_spectra),
+    labelled by Q. Returns the figure (saved to ``path``)."""
     s = spectra.spectrum
     directions, dropped = shown_directions(spectra)
     # one panel a row, as wide as a printed page: its texts print at their sizes
@@ -69,7 +70,7 @@ def plot_spectra(spectra: LocatedSpectra, path: Path, title: str = ""):
             for j, zeta in enumerate(s.dampings):
                 label = ("ground" if loc == GROUND else "G (mass centre)" if loc == CENTRE else loc)
                 if len(s.dampings) > 1:
-                    label += f", ζ = {zeta:g}"
+                    label += f", Q = {plain_number(1.0 / (2.0 * zeta))}" if shock else f", ζ = {zeta:g}"
                 # G a broad light band under the points' lines: a point near G (or moving as G does)
                 # would hide it otherwise
                 ax.plot(f[order], sa[order, j], color=colours[loc], ls=DAMPING_STYLES[j % len(DAMPING_STYLES)],
@@ -87,16 +88,20 @@ def plot_spectra(spectra: LocatedSpectra, path: Path, title: str = ""):
         plain_log_ticks(ax.xaxis)
         plain_log_ticks(ax.yaxis)
         ax.set_xlabel("oscillator frequency [Hz]")
-        ax.set_ylabel("sa [m/s²]")
+        ax.set_ylabel(f"{'maximax' if shock else 'sa'} [m/s²]")
         ax.set_title(f"along {direction}")
         ax.grid(True, which="both", alpha=0.25)
         g_axis = ax.secondary_yaxis("right", functions=(lambda a: a / G_STANDARD, lambda a: a * G_STANDARD))
-        g_axis.set_ylabel("sa [g]")
+        g_axis.set_ylabel(f"{'maximax' if shock else 'sa'} [g]")
         plain_log_ticks(g_axis.yaxis)
         ax.legend(fontsize=8, loc="best")
-    damping = ", ".join(f"{z:g}" for z in s.dampings)
-    heading = "Response spectra (maximax absolute acceleration)" + (f": {title}" if title else "")
-    lines = [heading, f"damping {damping}"]
+    if shock:
+        heading = "Shock response spectra (maximax absolute acceleration)" + (f": {title}" if title else "")
+        lines = [heading, "Q = " + ", ".join(plain_number(1.0 / (2.0 * z)) for z in s.dampings)
+                 + "; positive, negative, primary and residual in srs.csv"]
+    else:
+        heading = "Response spectra (maximax absolute acceleration)" + (f": {title}" if title else "")
+        lines = [heading, "damping " + ", ".join(f"{z:g}" for z in s.dampings)]
     lines += [f"no response along {d} (sa at most {v:.2g} m/s², below {plain_number(NEGLIGIBLE)} of the largest: "
               "rounding)" for d, v in dropped.items()]
     fig.suptitle("\n".join(phrase_wrap(line, int(13 * width)) for line in lines), fontsize=9)

@@ -81,11 +81,15 @@ def analyse(system: System, settings: Settings, keep: bool = True, csv=None, pla
     result.notes, result.warnings = diagnose(result)
     if result.spectra is not None:
         from rbhyst.solve.located import unfinished_note
+        from rbhyst.solve.located_shock import excitation_end, residual_note
 
         dampings, periods = settings.spectra
-        ends = [signal.end for signal in system.excitation.signals.values()]
-        end = max(ends) if ends and None not in ends else None  # (a sine without end never ends)
-        note = unfinished_note(end, result.steps * result.settings.dt, periods, dampings)
+        t_end = result.steps * result.settings.dt
+        if settings.spectra_kind == "srs":
+            note = residual_note(result.spectra, t_end)
+        else:
+            end = excitation_end(system.excitation) if system.excitation.signals else None
+            note = unfinished_note(end, t_end, periods, dampings)
         result.notes += [note] if note else []
     result.warnings += accuracy_warnings(warnings_for(result.accuracy, result.settings, result.stats, result))
     if result.kinematics is None:

@@ -164,11 +164,21 @@ def write_summary(result: Result, path: Path) -> None:
     Path(path).write_text(json.dumps(result.summary(), indent=2) + "\n")
 
 
+def spectra_file(spectra) -> str:
+    """The file a run's spectra go to: spectra.csv, or srs.csv for shock response spectra."""
+    return "srs.csv" if getattr(spectra, "kind", "sa") == "srs" else "spectra.csv"
+
+
 def write_spectra_csv(spectra: "LocatedSpectra", path: Path) -> None:
-    from rbhyst.solve.located import SPECTRA_COLUMNS  # (the spectra's kernels only where there are spectra)
+    """spectra.csv (rbhyst.solve.located.SPECTRA_COLUMNS), or a run's srs.csv (LocatedShockSpectra:
+    rbhyst.solve.located_shock.RUN_SRS_COLUMNS)."""
+    if getattr(spectra, "kind", "sa") == "srs":
+        from rbhyst.solve.located_shock import RUN_SRS_COLUMNS as columns
+    else:
+        from rbhyst.solve.located import SPECTRA_COLUMNS as columns  # (the spectra's kernels only where there are spectra)
 
     labels, numbers = spectra.table()
-    lines = [",".join(SPECTRA_COLUMNS)]
+    lines = [",".join(columns)]
     lines += [f"{loc},{direction}," + ",".join(f"{v:.10g}" for v in row)
               for (loc, direction), row in zip(labels, numbers)]
     Path(path).write_text("\n".join(lines) + "\n", encoding="utf-8")

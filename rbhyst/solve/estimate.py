@@ -390,8 +390,7 @@ def _add_spectra_errors(out: dict, result, est: Estimator, rtol: float) -> None:
     spectrum over periods and dampings, relative to the reference's peak: ``sa_<location>_<direction>``."""
     if result.spectra is None:
         return
-    from rbhyst.solve.located import SpectraSink
-    from rbhyst.solve.plan import compute_times, splitting
+    from rbhyst.solve.plan import body_sink, compute_times, splitting
 
     s = result.settings
     bounds, substeps = splitting(result.system, s, result.stats.steps)
@@ -403,15 +402,16 @@ def _add_spectra_errors(out: dict, result, est: Estimator, rtol: float) -> None:
 
     located = body_spectrum_columns(result.layout)
     raw = est.solution(rtol, times).raw(result.system)
-    sink = SpectraSink([label for label, _ in located], *s.spectra, dt=s.dt)
+    sink = body_sink(result.system, s)([label for label, _ in located])
     columns = [c for _, c in located]
-    sink.update(result.layout.table(raw.slice(0, 1))[:, columns])
+    first = result.layout.table(raw.slice(0, 1))
+    sink.update(first[:, columns], None, first[:, 0])
     i = 1
     for lo, hi, nsub in zip(bounds[:-1], bounds[1:], substeps):
         n = int(hi - lo) * int(nsub)
         for k in range(i, i + n, 65_536):
-            part = raw.slice(k, min(k + 65_536, i + n))
-            sink.update(result.layout.table(part)[:, columns], s.dt / int(nsub))
+            part = result.layout.table(raw.slice(k, min(k + 65_536, i + n)))
+            sink.update(part[:, columns], s.dt / int(nsub), part[:, 0])
         i += n
     ref = sink.result()
     # a spectrum the reference leaves at rest (a direction the scene does not move in: rounding
@@ -422,7 +422,7 @@ def _add_spectra_errors(out: dict, result, est: Estimator, rtol: float) -> None:
         top = float(np.max(theirs))
         denom = top if top > AT_REST * scale else scale
         err = float(np.max(np.abs(mine - theirs))) / denom if denom > 0 else 0.0
-        out["estimated_error"][f"sa_{loc}_{direction}"] = err
+        out["estimated_error"][f"{'srs' if s.spectra_kind == 'srs' else 'sa'}_{loc}_{direction}"] = err
 
 
 def _halving(result, settings) -> dict:

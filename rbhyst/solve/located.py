@@ -99,8 +99,8 @@ class SpectraSink:
         self.signals = tuple(signals)
         self._acc = SpectrumAccumulator(periods, dampings, len(self.signals), dt)
 
-    def update(self, chunk: np.ndarray, h: float | None = None) -> None:
-        """The next rows, ``h`` apart (default the sink's dt)."""
+    def update(self, chunk: np.ndarray, h: float | None = None, times=None) -> None:
+        """The next rows, ``h`` apart (default the sink's dt; their ``times`` are not needed)."""
         self._acc.update(chunk, h)
 
     def result(self) -> LocatedSpectra:

@@ -89,7 +89,7 @@ class Rows:
                  compute_steps: int | None = None):
         """csv: where the written rows also go, a function of the column names that opens a
         writer (``add(rows)``, ``close()``, ``path``; rbhyst.results.writers.CsvWriter), or None;
-        spectra: (dampings, periods) of the response spectra to stream (Settings.spectra), for
+        spectra: what makes the sink of the spectra to stream from their labels (body_sink), for
         rows ``dt`` apart (or as :meth:`add` says); None for none. compute_steps: of the whole
         run, where steps of dt are split (Plan.compute_steps; n_steps where they are not)."""
         self.layout = layout
@@ -112,11 +112,9 @@ class Rows:
         self._compared: list[np.ndarray] = []
         self.spectra = None
         if spectra is not None:
-            from rbhyst.solve.located import SpectraSink
-
             located = body_spectrum_columns(layout)
             self._spectrum_columns = [c for _, c in located]
-            self.spectra = SpectraSink([label for label, _ in located], *spectra, dt=dt)
+            self.spectra = spectra([label for label, _ in located])
 
     def add(self, raw: Raw, sub: int = 1) -> None:
         """Rows of consecutive steps; with ``sub`` > 1, rows of every compute step of dt / sub,
@@ -126,7 +124,7 @@ class Rows:
         direct = self._kept is not None and self.every == 1 and sub == 1
         table = self.layout.table(raw, out=self._kept[self._next:self._next + n] if direct else None)
         if self.spectra is not None:  # every compute step, whatever output.every writes
-            self.spectra.update(table[:, self._spectrum_columns], self.dt / sub)
+            self.spectra.update(table[:, self._spectrum_columns], self.dt / sub, table[:, 0])
         first = (-self._node) % self.compare_every
         self._compared.append(table[first::self.compare_every][:, self._compare_columns])
         self._node += len(table)
@@ -493,7 +491,7 @@ class FixedStepPlan(Plan):
         # the spectra, the peaks and a tap see every compute step where a step of dt is split (a
         # short pulse's response between the rows)
         fine = spectra or tap is not None or self.nsub > 1
-        rows = Rows(self.layout, self.n_steps, s.every, keep, csv, spectra=s.spectra, dt=s.dt,
+        rows = Rows(self.layout, self.n_steps, s.every, keep, csv, spectra=body_sink(system, s), dt=s.dt,
                     compare_every=compare_every, compute_steps=self.compute_steps)
         wall = 0.0
         try:
@@ -531,14 +529,32 @@ class _Buffers:
         self.fb = np.empty(ne)  # (the row before the chunk's: kept by none of these)
 
 
+def body_sink(system: System, s: Settings):
+    """What makes the sink of the body's spectra from their labels (None without output.spectra)."""
+    if s.spectra is None:
+        return None
+    if s.spectra_kind == "srs":  # primary up to the excitation's end, residual after
+        from rbhyst.solve.located_shock import ShockSink, excitation_end
+
+        return lambda labels: ShockSink(labels, *s.spectra, dt=s.dt, switch=excitation_end(system.excitation))
+    from rbhyst.solve.located import SpectraSink
+
+    return lambda labels: SpectraSink(labels, *s.spectra, dt=s.dt)
+
+
 def run_spectra(system: System, s: Settings, body):
-    """The run's LocatedSpectra: the ground's, from its signals themselves (rbhyst.solve.ground),
-    and the body's (G and the points) as the rows drove them; None without output.spectra."""
+    """The run's LocatedSpectra (LocatedShockSpectra with kind "srs"): the ground's, from its
+    signals themselves (rbhyst.solve.ground), and the body's (G and the points) as the rows drove
+    them; None without output.spectra."""
     if body is None:
         return None
+    n_steps = output_steps(system, s)
+    if s.spectra_kind == "srs":
+        from rbhyst.solve.located_shock import ground_shock_spectra
+
+        return ground_shock_spectra(system.excitation, n_steps * s.dt, *s.spectra).joined(body)
     from rbhyst.solve.ground import ground_spectra
 
-    n_steps = output_steps(system, s)
     return ground_spectra(system.excitation, n_steps * s.dt, *s.spectra).joined(body)
 
 

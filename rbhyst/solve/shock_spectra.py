@@ -28,6 +28,7 @@ import numpy as np
 from numba import njit
 
 from rbhyst.errors import InputError
+from rbhyst.model.periods import octave_frequencies  # noqa: F401 (re-exported beside the spectra it grids)
 from rbhyst.solve.spectra import _turning_value, step_coefficients, substep_counts
 
 #: the columns of srs.csv, one row per damping and frequency
@@ -61,15 +62,15 @@ class ShockSpectrum:
 
     @property
     def positive(self) -> np.ndarray:
-        return np.maximum(self.primary_positive, self.residual_positive)
+        return np.fmax(self.primary_positive, self.residual_positive)
 
     @property
     def negative(self) -> np.ndarray:
-        return np.maximum(self.primary_negative, self.residual_negative)
+        return np.fmax(self.primary_negative, self.residual_negative)
 
     @property
     def maximax(self) -> np.ndarray:
-        return np.maximum(self.primary, self.residual)
+        return np.fmax(self.primary, self.residual)
 
     @property
     def pv(self) -> np.ndarray:
@@ -94,20 +95,6 @@ class ShockSpectrum:
         return np.vstack(rows)
 
 
-def octave_frequencies(lo: float, hi: float, per_octave: int = 12) -> np.ndarray:
-    """lo, lo 2^(1/n), ... up to hi (hi itself last when the octaves do not land on it)."""
-    problems = []
-    if not (math.isfinite(lo) and lo > 0 and math.isfinite(hi) and hi > lo):
-        problems.append(f"--frequencies: {lo:g}..{hi:g} Hz: two positive frequencies, the lower first")
-    if not (isinstance(per_octave, (int, np.integer)) and per_octave >= 1):
-        problems.append(f"--per-octave: {per_octave!r}: a whole number, 1 or more")
-    if problems:
-        raise InputError(problems)
-    n = math.floor(per_octave * math.log2(hi / lo) + 1e-9)
-    f = lo * 2.0 ** (np.arange(n + 1) / per_octave)
-    return f if f[-1] >= hi * (1.0 - 1e-9) else np.append(f, hi)
-
-
 def residual_samples(frequencies, dampings, dt: float) -> int:
     """Samples of rest after the record: the ramp to zero, then one damped period of the lowest
     frequency (every oscillator has then passed a positive and a negative extremum of its free
@@ -122,55 +109,151 @@ def shock_spectrum(acc, dt: float, frequencies_hz, dampings=(0.05,), points_per_
     a = np.ascontiguousarray(np.asarray(acc, dtype=float).ravel())
     f = np.atleast_1d(np.asarray(frequencies_hz, dtype=float))
     z = np.atleast_1d(np.asarray(dampings, dtype=float))
-    problems = [f"frequencies: {v:g} Hz must be positive and finite" for v in f if not (math.isfinite(v) and v > 0)]
-    problems += [f"dampings: {v:g} must be at least 0 and below 1" for v in z if not 0.0 <= v < 1.0]
+    problems = oscillator_problems(f, z)
     if not (math.isfinite(dt) and dt > 0):
         problems.append(f"dt: {dt!r} s must be positive")
     bad = np.flatnonzero(~np.isfinite(a))
     if bad.size:
         problems.append(f"acceleration: sample {bad[0] + 1} is {a[bad[0]]} (every sample must be a finite number)")
-    if f.size == 0 or z.size == 0:
-        problems.append("frequencies, dampings: at least one of each")
     if problems:
         raise InputError(problems)
-    omega = np.repeat(2.0 * np.pi * f, len(z))
-    zeta = np.tile(z, len(f))
-    m = substep_counts(2.0 * np.pi / omega, dt, points_per_period)
-    coef = np.empty((11, len(omega)))
-    coef[:8] = step_coefficients(omega, zeta, dt / m).T
-    coef[8] = 2.0 * zeta * omega
-    coef[9] = omega * omega
-    coef[10] = dt / m if points_per_period > 0 else 0.0
-    rest = np.zeros(residual_samples(f, z, dt))
-    peaks = np.zeros((5, len(omega)))
+    acc_ = ShockAccumulator(f, z, 1, dt, points_per_period)
     if a.size >= 1:
-        _shock_peaks(a, rest, coef, m, peaks)
-    shape = (len(f), len(z))
-    pp, pn, rp, rn, sd = (p.reshape(shape) for p in peaks)
-    return ShockSpectrum(f.copy(), z.copy(), float(dt), int(a.size), pp, pn, rp, rn, sd)
+        acc_.update(a[:, None])
+        acc_.end_primary()
+        acc_.update(np.zeros((residual_samples(f, z, dt), 1)))
+    else:
+        acc_.end_primary()
+    return acc_.result()[0]
+
+
+def oscillator_problems(f: np.ndarray, z: np.ndarray) -> list[str]:
+    """One line per frequency or damping an oscillator cannot have."""
+    problems = [f"frequencies: {v:g} Hz must be positive and finite" for v in f if not (math.isfinite(v) and v > 0)]
+    problems += [f"dampings: {v:g} must be at least 0 and below 1" for v in z if not 0.0 <= v < 1.0]
+    if f.size == 0 or z.size == 0:
+        problems.append("frequencies, dampings: at least one of each")
+    return problems
+
+
+class ShockAccumulator:
+    """The running shock spectrum of ``n_signals`` accelerations fed chunk by chunk.
+
+    ``update(chunk, h)`` steps every oscillator over the next samples, ``h`` apart (the first of a
+    chunk follows the last before it by ``h``); the peaks are the primary ones until
+    :meth:`end_primary`, the residual ones after it. Any split of a history gives results
+    bit-identical to feeding it whole (each oscillator carries x, x' and the last sample), and
+    only the state (signals x frequencies x dampings) is held: a run of any length streams.
+    """
+
+    def __init__(self, frequencies_hz, dampings, n_signals: int, dt: float, points_per_period: int = 20):
+        f = np.atleast_1d(np.asarray(frequencies_hz, dtype=float))
+        z = np.atleast_1d(np.asarray(dampings, dtype=float))
+        problems = oscillator_problems(f, z)
+        if problems:
+            raise InputError(problems)
+        self.frequencies_hz, self.dampings = f.copy(), z.copy()
+        self.dt, self.n_signals, self.points_per_period = float(dt), int(n_signals), int(points_per_period)
+        self._omega = np.repeat(2.0 * np.pi * f, len(z))  # oscillator o = frequency i, damping j at i * nz + j
+        self._zeta = np.tile(z, len(f))
+        self._steps: dict[float, tuple[np.ndarray, np.ndarray]] = {}
+        n = len(self._omega)
+        # per signal: x, x', the running largest and least absolute acceleration, max |x|
+        self._state = np.zeros((self.n_signals, 5, n))
+        self._last = np.zeros(self.n_signals)
+        self._primary: np.ndarray | None = None  # (signals, 2, n): positive, negative, once ended
+        self.samples = 0
+
+    def _step(self, h: float) -> tuple[np.ndarray, np.ndarray]:
+        """(coefficients, substeps) of every oscillator for samples h apart, computed once per h."""
+        if h not in self._steps:
+            m = substep_counts(2.0 * np.pi / self._omega, h, self.points_per_period)
+            coef = np.empty((11, len(self._omega)))
+            coef[:8] = step_coefficients(self._omega, self._zeta, h / m).T
+            coef[8] = 2.0 * self._zeta * self._omega
+            coef[9] = self._omega * self._omega
+            coef[10] = h / m if self.points_per_period > 0 else 0.0
+            self._steps[h] = (coef, m)
+        return self._steps[h]
+
+    def update(self, chunk, h: float | None = None) -> None:
+        """The next samples (n, n_signals), SI."""
+        a = np.ascontiguousarray(np.asarray(chunk, dtype=float).reshape(-1, self.n_signals))
+        if a.shape[0] == 0:
+            return
+        start = 0
+        if self.samples == 0:
+            self._last[:] = a[0]
+            start = 1  # the first sample starts the motion from rest
+        coef, m = self._step(self.dt if h is None else float(h))
+        _shock_advance(a, start, self._last, coef, m, self._state)
+        self._last[:] = a[-1]
+        self.samples += a.shape[0]
+
+    def update_until(self, chunk, h: float | None, times, switch: float | None) -> None:
+        """:meth:`update` with the samples' ``times``: the primary spectrum ends at the last
+        sample at or before ``switch`` (s; None: it does not end here)."""
+        if switch is None or times is None or self._primary is not None:
+            self.update(chunk, h)
+            return
+        a = np.asarray(chunk, dtype=float).reshape(-1, self.n_signals)
+        k = int(np.searchsorted(np.asarray(times, dtype=float), switch * (1.0 + 1e-12) + 1e-15, side="right"))
+        self.update(a[:k], h)
+        if k < len(a):
+            self.end_primary()
+            self.update(a[k:], h)
+
+    def jump(self, values) -> None:
+        """The input jumps to ``values`` at the last sample's time (the motion is continuous)."""
+        self._last[:] = np.broadcast_to(np.asarray(values, dtype=float), (self.n_signals,))
+
+    def end_primary(self) -> None:
+        """The excitation ends here: the peaks so far are the primary ones; the residual ones
+        start from the absolute acceleration here (the free vibration starts from this state)."""
+        if self._primary is not None:
+            return
+        st = self._state
+        self._primary = np.stack([st[:, 2].copy(), 0.0 - st[:, 3]], axis=1)  # (not -0.0 where it never went below)
+        end = -(2.0 * self._zeta * self._omega * st[:, 1] + self._omega * self._omega * st[:, 0])
+        st[:, 2] = np.maximum(end, 0.0)
+        st[:, 3] = np.minimum(end, 0.0)
+
+    def result(self) -> list[ShockSpectrum]:
+        """One ShockSpectrum a signal; the residual is NaN where the excitation has not ended."""
+        shape = (len(self.frequencies_hz), len(self.dampings))
+        out = []
+        for s in range(self.n_signals):
+            st = self._state[s]
+            if self._primary is None:
+                pp, pn = st[2], 0.0 - st[3]
+                rp = rn = np.full(st.shape[1], np.nan)
+            else:
+                (pp, pn), rp, rn = self._primary[s], st[2], 0.0 - st[3]
+            out.append(ShockSpectrum(self.frequencies_hz.copy(), self.dampings.copy(), self.dt, self.samples,
+                                     *(np.array(v).reshape(shape) for v in (pp, pn, rp, rn, st[4]))))
+        return out
 
 
 @njit(cache=True, error_model="numpy")
-def _shock_peaks(acc, rest, coef, m, peaks):
-    """Every oscillator (column o of coef, m[o] substeps a step) from rest at acc[0] over acc, then
-    over acc[-1] -> rest: peaks[0..3, o] the primary positive, primary negative, residual positive,
-    residual negative absolute acceleration (magnitudes), peaks[4, o] max |x| over both."""
-    for o in range(coef.shape[1]):
-        a11, a12, a21, a22 = coef[0, o], coef[1, o], coef[2, o], coef[3, o]
-        b11, b12, b21, b22 = coef[4, o], coef[5, o], coef[6, o], coef[7, o]
-        cv, cx, hs = coef[8, o], coef[9, o], coef[10, o]
-        mo = m[o]
-        x = 0.0
-        v = 0.0
-        hi = 0.0
-        lo = 0.0
-        sd = 0.0
-        a0 = acc[0]
-        for part in range(2):
-            src = acc if part == 0 else rest
-            first = 1 if part == 0 else 0
-            for i in range(first, src.shape[0]):
-                a1 = src[i]
+def _shock_advance(acc, start, last, coef, m, state):
+    """Every oscillator (column o of coef, m[o] substeps a step) for every signal s over
+    acc[start:, s], from last[s]: state[s] = x, x', the largest and least absolute acceleration,
+    max |x| (in place). The absolute acceleration is -(2 zeta omega x' + omega^2 x), its peaks
+    between the points on the Hermite cubic through values and slopes (_turning_value)."""
+    for s in range(acc.shape[1]):
+        for o in range(coef.shape[1]):
+            a11, a12, a21, a22 = coef[0, o], coef[1, o], coef[2, o], coef[3, o]
+            b11, b12, b21, b22 = coef[4, o], coef[5, o], coef[6, o], coef[7, o]
+            cv, cx, hs = coef[8, o], coef[9, o], coef[10, o]
+            mo = m[o]
+            x = state[s, 0, o]
+            v = state[s, 1, o]
+            hi = state[s, 2, o]
+            lo = state[s, 3, o]
+            sd = state[s, 4, o]
+            a0 = last[s]
+            for i in range(start, acc.shape[0]):
+                a1 = acc[i, s]
                 da = (a1 - a0) / mo
                 p0 = a0
                 for k in range(1, mo + 1):
@@ -190,10 +273,8 @@ def _shock_peaks(acc, rest, coef, m, peaks):
                     v = vn
                     p0 = p1
                 a0 = a1
-            peaks[2 * part, o] = hi
-            peaks[2 * part + 1, o] = 0.0 - lo  # (not -0.0 where it never went below)
-            if part == 0:  # the residual's peaks start at the record's end, from its state there
-                end = -(cv * v + cx * x)
-                hi = max(end, 0.0)
-                lo = min(end, 0.0)
-        peaks[4, o] = sd
+            state[s, 0, o] = x
+            state[s, 1, o] = v
+            state[s, 2, o] = hi
+            state[s, 3, o] = lo
+            state[s, 4, o] = sd

@@ -325,7 +325,7 @@ def solve_with_stats(system, settings, rtol: float = RTOL, t_out: np.ndarray | N
     in a fixed-step run), or at the increasing times ``t_out`` (from 0) if given, all kept: a
     study asks for the union of several grids.
     """
-    from rbhyst.solve.plan import Rows, compute_times, grid, run_spectra, splitting
+    from rbhyst.solve.plan import Rows, body_sink, compute_times, grid, run_spectra, splitting
 
     n_steps, _ = grid(system, settings)
     every = 1
@@ -349,7 +349,8 @@ def solve_with_stats(system, settings, rtol: float = RTOL, t_out: np.ndarray | N
     sol = integrate(system, t_out, rtol)
     raw = sol.raw(system)
     layout = Layout(system, settings.points)
-    rows = Rows(layout, n_steps if segments else len(sol.t) - 1, every, keep, csv, spectra=spectra, dt=settings.dt,
+    rows = Rows(layout, n_steps if segments else len(sol.t) - 1, every, keep, csv,
+                spectra=None if spectra is None else body_sink(system, settings), dt=settings.dt,
                 compute_steps=len(sol.t) - 1)
     try:
         rows.add(raw.slice(0, 1))
