@@ -10,7 +10,9 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from figure_checks import overlapping_titles, points_under_legend, smallest_print_pt, tick_values
+from matplotlib.text import Text
+
+from figure_checks import drawn, overlapping_titles, points_under_legend, smallest_print_pt, tick_values
 from rbhyst.analyses.qualification.rrs import requested_rrs
 from rbhyst.analyses.qualification.matching import Check
 from rbhyst.report.qualification import plot_verdict
@@ -313,3 +315,38 @@ def test_every_figure_of_a_run_reads_in_print(tmp_path):
             "spectra": plot_spectra(res.spectra, tmp_path / "sp.png", title="seed")}
     small = {k: round(smallest_print_pt(f), 2) for k, f in made.items() if smallest_print_pt(f) < 7.9}
     assert small == {}
+
+
+def ida_cases(n_values: int) -> list[dict]:
+    """Cases of 3 motions x 4 levels x n_values masses, their peaks rising with level and mass."""
+    out = []
+    for m in range(3):
+        for s in (0.5, 1.0, 1.5, 2.0):
+            for k in range(n_values):
+                out.append({"motion": f"m{m}", "scale": s, "status": "ok", "vary": {"body.mass": str(100.0 + 5 * k)},
+                            "peaks": {"peak_u1_m": 0.01 * s * (1 + k / 48) * (1 + 0.1 * m),
+                                      "peak_at1_m_s2": 3 * s * (1 - k / 96)}})
+    return out
+
+
+@pytest.mark.parametrize("n_values", [3, 48])
+def test_ida_tells_its_combinations_within_the_figure(tmp_path, n_values):
+    """A few values a legend, many (48 masses: a legend running off the figure) a colour bar with
+    at most MAX_ENTRIES labels; every text inside the figure."""
+    from rbhyst.report.sweep import MAX_ENTRIES, plot_ida
+
+    fig = plot_ida(ida_cases(n_values), ["peak_u1_m", "peak_at1_m_s2"], ["body.mass"], "scale factor",
+                   tmp_path / "ida.png", {"body.mass": "kg"})
+    r = drawn(fig).canvas.get_renderer()
+    legends = [ax.get_legend() for ax in fig.axes if ax.get_legend() is not None]
+    if n_values <= MAX_ENTRIES:
+        assert len(legends) == 1 and len(legends[0].get_texts()) > n_values
+    else:
+        assert not legends
+        bar = [ax for ax in fig.axes if ax.get_label() == "<colorbar>"]
+        assert len(bar) == 1 and 2 <= len(bar[0].get_yticklabels()) <= MAX_ENTRIES
+    box = fig.bbox
+    for t in fig.findobj(Text):
+        if t.get_visible() and t.get_text().strip():
+            e = t.get_window_extent(r)
+            assert box.x0 - 1 <= e.x0 and e.x1 <= box.x1 + 1 and box.y0 - 1 <= e.y0 and e.y1 <= box.y1 + 1, t.get_text()

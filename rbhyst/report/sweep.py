@@ -189,7 +189,10 @@ def plot_ida(ok, quantities, vary_keys, scale_label, path: Path, units: dict | N
         ax.set_xlabel(_label(q))
         ax.set_ylabel(scale_label)
     cell = axes[len(quantities)]
-    cell.legend(*_ida_legend(vary_keys, units, idents, look, values), loc="center", fontsize=7, frameon=False)
+    if values is None and len(idents) > MAX_ENTRIES:
+        _colour_key(fig, cell, vary_keys, units, idents, look)
+    else:
+        cell.legend(*_ida_legend(vary_keys, units, idents, look, values), loc="center", fontsize=7, frameon=False)
     motions = len({c["motion"] for c in ok})
     heading = f"Incremental dynamic analysis: {motions} motion{'s' * (motions != 1)}"
     if several:
@@ -198,6 +201,26 @@ def plot_ida(ok, quantities, vary_keys, scale_label, path: Path, units: dict | N
     fig.suptitle(heading)
     save(fig, path)
     return fig
+
+
+#: combinations a legend lists one by one; more are told by a colour bar
+MAX_ENTRIES = 12
+
+
+def _colour_key(fig, cell, vary_keys, units, idents, look) -> None:
+    """A colour bar in the legend's cell for many combinations drawn one colour each: a colour a
+    combination in their order, at most MAX_ENTRIES of them labelled (every one is in stats.csv)."""
+    from matplotlib.cm import ScalarMappable
+    from matplotlib.colors import BoundaryNorm, ListedColormap
+
+    n = len(idents)
+    cmap = ListedColormap([look[ident][0] for ident in idents])
+    bar = fig.colorbar(ScalarMappable(norm=BoundaryNorm(np.arange(n + 1) - 0.5, n), cmap=cmap),
+                       ax=cell, location="left", fraction=0.12, shrink=0.9, aspect=25)
+    ticks = np.unique(np.linspace(0, n - 1, MAX_ENTRIES).round().astype(int))
+    bar.set_ticks(ticks, labels=[", ".join(_value(v) for v in idents[i]) for i in ticks], fontsize=7)
+    bar.minorticks_off()
+    bar.set_label(", ".join(key_label(k, units) for k in vary_keys) + " (median over the motions)", fontsize=7)
 
 
 def _num(v: str) -> float:
