@@ -165,15 +165,21 @@ class ShockAccumulator:
         self.samples = 0
 
     def _step(self, h: float) -> tuple[np.ndarray, np.ndarray]:
-        """(coefficients, substeps) of every oscillator for samples h apart, computed once per h."""
+        """(coefficients, groups) of every oscillator for samples h apart, computed once per h:
+        the oscillators ascend in frequency, so their substep counts never decrease along them
+        and each count is one contiguous group (first, end, m) for the kernel."""
         if h not in self._steps:
             m = substep_counts(2.0 * np.pi / self._omega, h, self.points_per_period)
+            edges = np.flatnonzero(np.diff(m)) + 1
+            first = np.concatenate([[0], edges])
+            end = np.concatenate([edges, [len(m)]])
+            groups = np.ascontiguousarray(np.stack([first, end, m[first]], axis=1), dtype=np.int64)
             coef = np.empty((11, len(self._omega)))
             coef[:8] = step_coefficients(self._omega, self._zeta, h / m).T
             coef[8] = 2.0 * self._zeta * self._omega
             coef[9] = self._omega * self._omega
             coef[10] = h / m if self.points_per_period > 0 else 0.0
-            self._steps[h] = (coef, m)
+            self._steps[h] = (coef, groups)
         return self._steps[h]
 
     def update(self, chunk, h: float | None = None) -> None:
@@ -185,8 +191,8 @@ class ShockAccumulator:
         if self.samples == 0:
             self._last[:] = a[0]
             start = 1  # the first sample starts the motion from rest
-        coef, m = self._step(self.dt if h is None else float(h))
-        _shock_advance(a, start, self._last, coef, m, self._state)
+        coef, groups = self._step(self.dt if h is None else float(h))
+        _shock_advance(a, start, self._last, coef, groups, self._state)
         self._last[:] = a[-1]
         self.samples += a.shape[0]
 
@@ -235,46 +241,57 @@ class ShockAccumulator:
 
 
 @njit(cache=True, error_model="numpy")
-def _shock_advance(acc, start, last, coef, m, state):
-    """Every oscillator (column o of coef, m[o] substeps a step) for every signal s over
-    acc[start:, s], from last[s]: state[s] = x, x', the largest and least absolute acceleration,
-    max |x| (in place). The absolute acceleration is -(2 zeta omega x' + omega^2 x), its peaks
-    between the points on the Hermite cubic through values and slopes (_turning_value)."""
-    for s in range(acc.shape[1]):
-        for o in range(coef.shape[1]):
-            a11, a12, a21, a22 = coef[0, o], coef[1, o], coef[2, o], coef[3, o]
-            b11, b12, b21, b22 = coef[4, o], coef[5, o], coef[6, o], coef[7, o]
-            cv, cx, hs = coef[8, o], coef[9, o], coef[10, o]
-            mo = m[o]
-            x = state[s, 0, o]
-            v = state[s, 1, o]
-            hi = state[s, 2, o]
-            lo = state[s, 3, o]
-            sd = state[s, 4, o]
+def _shock_advance(acc, start, last, coef, groups, state):
+    """Every oscillator (column o of coef) for every signal s over acc[start:, s], from last[s]:
+    state[s] = x, x', the largest and least absolute acceleration, max |x| (in place). groups[g]
+    = (first, end, m): oscillators first..end-1 take m substeps a step, the innermost loop over
+    them (independent of each other: the compiler vectorises it, each oscillator's arithmetic the
+    same whatever the grouping). The absolute acceleration is -(2 zeta omega x' + omega^2 x), its
+    peaks between the points on the Hermite cubic through values and slopes (_turning_value)."""
+    n = acc.shape[0]
+    for g in range(groups.shape[0]):
+        lo = groups[g, 0]
+        hi = groups[g, 1]
+        m = groups[g, 2]
+        a11 = coef[0, lo:hi]
+        a12 = coef[1, lo:hi]
+        a21 = coef[2, lo:hi]
+        a22 = coef[3, lo:hi]
+        b11 = coef[4, lo:hi]
+        b12 = coef[5, lo:hi]
+        b21 = coef[6, lo:hi]
+        b22 = coef[7, lo:hi]
+        cv = coef[8, lo:hi]
+        cx = coef[9, lo:hi]
+        hs = coef[10, lo:hi]
+        for s in range(acc.shape[1]):
+            xs = state[s, 0, lo:hi]
+            vs = state[s, 1, lo:hi]
+            his = state[s, 2, lo:hi]
+            los = state[s, 3, lo:hi]
+            sds = state[s, 4, lo:hi]
             a0 = last[s]
-            for i in range(start, acc.shape[0]):
+            for i in range(start, n):
                 a1 = acc[i, s]
-                da = (a1 - a0) / mo
+                da = (a1 - a0) / m
                 p0 = a0
-                for k in range(1, mo + 1):
-                    p1 = a0 + k * da if k < mo else a1
-                    xn = (a11 * x + a12 * v) + (b11 * p0 + b12 * p1)
-                    vn = (a21 * x + a22 * v) + (b21 * p0 + b22 * p1)
-                    # the absolute acceleration is -(cv x' + cx x); its slope from x'' = -(a + y)
-                    yo = -(cv * v + cx * x)
-                    yn = -(cv * vn + cx * xn)
-                    go = -(cx * v - cv * (p0 - yo))
-                    gn = -(cx * vn - cv * (p1 - yn))
-                    turn = _turning_value(yo, yn, go, gn, hs)
-                    hi = max(hi, turn, yn)
-                    lo = min(lo, turn, yn)
-                    sd = max(sd, abs(_turning_value(x, xn, v, vn, hs)), abs(xn))
-                    x = xn
-                    v = vn
+                for k in range(1, m + 1):
+                    p1 = a0 + k * da if k < m else a1
+                    for o in range(hi - lo):
+                        x = xs[o]
+                        v = vs[o]
+                        xn = (a11[o] * x + a12[o] * v) + (b11[o] * p0 + b12[o] * p1)
+                        vn = (a21[o] * x + a22[o] * v) + (b21[o] * p0 + b22[o] * p1)
+                        # the absolute acceleration is -(cv x' + cx x); its slope from x'' = -(a + y)
+                        yo = -(cv[o] * v + cx[o] * x)
+                        yn = -(cv[o] * vn + cx[o] * xn)
+                        go = -(cx[o] * v - cv[o] * (p0 - yo))
+                        gn = -(cx[o] * vn - cv[o] * (p1 - yn))
+                        turn = _turning_value(yo, yn, go, gn, hs[o])
+                        his[o] = max(his[o], turn, yn)
+                        los[o] = min(los[o], turn, yn)
+                        sds[o] = max(sds[o], abs(_turning_value(x, xn, v, vn, hs[o])), abs(xn))
+                        xs[o] = xn
+                        vs[o] = vn
                     p0 = p1
                 a0 = a1
-            state[s, 0, o] = x
-            state[s, 1, o] = v
-            state[s, 2, o] = hi
-            state[s, 3, o] = lo
-            state[s, 4, o] = sd
