@@ -1040,6 +1040,71 @@ def make_motion(
 MOTION_MARK = "# rbhyst make-motion"
 
 
+@app.command("make-shock", cls=Command)
+def make_shock(
+    out: Annotated[Path, typer.Argument(help="Folder to write: shock_x1.csv (shock_x2.csv, shock_x3.csv), "
+                                             "srs_check.csv, srs_check.png, shocks.json.")],
+    srs: Annotated[Path, typer.Option(help="The SRS specification: a CSV of frequency_hz and the maximax SRS "
+                                           "with its unit (srs_g, srs_m_s2), straight between breakpoints on "
+                                           "log-log axes.")],
+    q: Annotated[float, typer.Option("--q", help="The specification's quality factor Q = 1 / (2 damping).")] = 10.0,
+    duration: Annotated[Optional[float], typer.Option(help="Length in s (default: 6 periods of the lowest "
+                                                           "frequency).")] = None,
+    method: Annotated[str, typer.Option(help="wavelets (each ends at rest by itself) or damped-sines "
+                                             "(Smallwood's, compensated to end at rest).")] = "wavelets",
+    table: Annotated[Optional[str], typer.Option(help="The shaker's limits, any of displacement=D (m, peak to "
+                                                      "peak), velocity=V (m/s), acceleration=A (g).")] = None,
+    seed: Annotated[int, typer.Option(help="Random seed: the same seed gives the same records.")] = 1,
+    axes: Annotated[int, typer.Option(help="1: a record for x1; 3: for x1, x2 and x3 (each its own).")] = 1,
+    plots: Annotated[bool, typer.Option("--plots/--no-plots", help="Write srs_check.png.")] = True,
+):
+    """A shock a shaker can play whose maximax SRS lies within MIL-STD-810's -1.5/+3 dB of a
+    specification at every 1/12-octave frequency of its range, starting and ending at rest.
+
+    Exit 3 when no record can, with what would work.
+    """
+    import json
+    import shlex
+
+    from rbhyst.analyses.qualification.table import read_table
+    from rbhyst.analyses.shock import synthesis
+    from rbhyst.analyses.shock.specification import LOWER_DB, UPPER_DB, read_specification
+    from rbhyst.files.outdir import staged_directory
+
+    with user_errors():
+        limits, problems = read_table(table)
+        spec = read_specification(srs)
+        if axes not in (1, 3):
+            problems.append(f"--axes: {axes}: 1 (x1) or 3 (x1, x2, x3)")
+        length = synthesis.default_duration(spec) if duration is None else duration
+        problems += synthesis.shock_problems(spec, q, length, method, {})
+        if problems:
+            raise InputError(problems)
+        made = synthesis.make_shocks(spec, q, length, method, seed, ["x1", "x2", "x3"][:axes], limits)
+        options = {"--srs": srs, "--q": q, "--duration": length, "--method": method, "--table": table,
+                   "--seed": seed, "--axes": axes}
+        mark = f"{SHOCK_MARK} " + " ".join(f"{k} {shlex.quote(str(v))}" for k, v in options.items() if v is not None)
+        say_replaced(out, "make-shock")
+        with staged_directory(out) as tmp:
+            for s in made:
+                (tmp / synthesis.record_name(s)).write_text(synthesis.record_text(s, mark), encoding="utf-8")
+            (tmp / "srs_check.csv").write_text("\n".join(synthesis.check_rows(made)) + "\n", encoding="utf-8")
+            data = synthesis.summary(made, spec, q, method, length, seed, limits)
+            (tmp / "shocks.json").write_text(json.dumps(data, indent=2) + "\n", encoding="utf-8")
+            if plots:
+                from rbhyst.report.shock_spectra import plot_srs_check
+
+                plot_srs_check(made, tmp / "srs_check.png", (LOWER_DB, UPPER_DB),
+                               title=f"{srs.name}, Q = {q:g}, {method}")
+    for line in synthesis.shock_lines(made):
+        say(line)
+    say(f"wrote {out}")
+
+
+#: the first line of every record make-shock writes
+SHOCK_MARK = "# rbhyst make-shock"
+
+
 def _motion_lines(made) -> list[str]:
     """make-motion's console lines: each record's TRS check, peak and strong motion, then each
     motion's correlation and coherence between its axes."""
