@@ -1064,6 +1064,7 @@ def make_shock(
     Exit 3 when no record can, with what would work.
     """
     import json
+    import math
     import shlex
 
     from rbhyst.analyses.qualification.table import read_table
@@ -1077,9 +1078,14 @@ def make_shock(
         if axes not in (1, 3):
             problems.append(f"--axes: {axes}: 1 (x1) or 3 (x1, x2, x3)")
         length = synthesis.default_duration(spec) if duration is None else duration
-        problems += synthesis.shock_problems(spec, q, length, method, {})
+        problems += synthesis.shock_problems(q, method, {})
+        if not (math.isfinite(length) and length > 0):
+            problems.append(f"--duration: {length:g}: a length in s, above 0")
         if problems:
             raise InputError(problems)
+        short = synthesis.duration_problem(spec, length)
+        if short:
+            raise AnalysisError(short)
         made = synthesis.make_shocks(spec, q, length, method, seed, ["x1", "x2", "x3"][:axes], limits)
         options = {"--srs": srs, "--q": q, "--duration": length, "--method": method, "--table": table,
                    "--seed": seed, "--axes": axes}

@@ -239,19 +239,23 @@ def make_shocks(spec: Specification, q: float, duration: float, method: str, see
             for axis, stream in streams(axes, vertical).items()]
 
 
-def shock_problems(spec: Specification, q: float, duration: float | None, method: str, keys: dict) -> list[str]:
-    """What no record can do: an unknown method, a Q out of range, a record too short to hold the
-    lowest frequency's wavelet (three half-sines: 1.5 / f)."""
+def shock_problems(q: float, method: str, keys: dict) -> list[str]:
+    """The request's mistakes: an unknown method, a Q out of range."""
     from rbhyst.analyses.shock.specification import q_problems
 
     problems = q_problems(q, keys.get("q", "--q"))
     if method not in METHODS:
         problems.append(f"{keys.get('method', '--method')}: {method!r}: {' or '.join(METHODS)}")
-    if duration is not None and duration < least_duration(spec):
-        problems.append(f"{keys.get('duration', '--duration')}: {duration:g} s is too short for "
-                        f"{spec.frequency_hz[0]:g} Hz, the specification's lowest frequency: at least "
-                        f"{least_duration(spec):.4g} s (a wavelet of three half-sines lasts 1.5 / f)")
     return problems
+
+
+def duration_problem(spec: Specification, duration: float, key: str = "--duration") -> str | None:
+    """A record too short to hold the lowest frequency's wavelet (three half-sines: 1.5 / f)."""
+    if duration >= least_duration(spec):
+        return None
+    return (f"{key}: {duration:g} s is too short for {spec.frequency_hz[0]:g} Hz, the specification's lowest "
+            f"frequency: {least_duration(spec):.4g} s at least would do (a wavelet of three half-sines lasts 1.5 / f; "
+            f"{default_duration(spec):g} s leaves room for more)")
 
 
 def default_duration(spec: Specification) -> float:
