@@ -1171,8 +1171,17 @@ def qualify(
         "--out", help="Output folder (default: the deck's output folder + '-qualify').")] = None,
     plots: Annotated[bool, typer.Option("--plots/--no-plots", help="Write qualification.png.")] = True,
     report: Annotated[bool, typer.Option("--report", help="Also write report.html (see `rbhyst report`).")] = False,
+    shock: Annotated[Optional[Path], typer.Option(help="A shock qualification to an SRS specification (a CSV, as "
+                                                       "make-shock reads it): a shock matched per axis, each axis "
+                                                       "in both directions.")] = None,
+    pulse: Annotated[Optional[str], typer.Option(help="A shock qualification to a named pulse (see rbhyst "
+                                                      "shock --pulse).")] = None,
 ):
     """The verdict of a deck against a required response spectrum: qualification.json and .png.
+
+    With --shock, --pulse or the deck's qualify.shock: the verdict under shock, each axis in both
+    directions (three shocks each, or qualify.shock.shocks), by the workflow of `rbhyst shock`:
+    qualification.json and shock.json.
 
     Exit 0: it qualifies; 1: it does not (each failed criterion said); 2: a mistake in the
     deck or options; 3: motions that cannot be matched, or a run that fails.
@@ -1183,6 +1192,17 @@ def qualify(
 
     with user_errors():
         d = load_deck(deck, need=ANALYSIS_SECTIONS)
+        asked = {"standard": standard, "sds": sds, "z_over_h": z_over_h, "level": level, "rrs": rrs,
+                 "rrs_x2": rrs_x2, "rrs_x3": rrs_x3, "rrs_damping": rrs_damping, "motions": motions, "seed": seed,
+                 "duration": duration, "motion_dt": motion_dt, "statistic": statistic, "table": table,
+                 "shock": shock, "pulse": pulse}
+        from rbhyst.analyses.shock import qualify as shock_qualify
+
+        if shock_qualify.wanted(d, asked):
+            if report:
+                raise InputError("--report: not yet for a shock qualification (shock.json and qualification.json "
+                                 "hold the verdict)")
+            return _qualify_shock(d, deck, shock_qualify.request(d, asked), out, plots, integrator, dt, tolerance)
         req = request(d, {"standard": standard, "sds": sds, "z_over_h": z_over_h, "level": level, "rrs": rrs,
                           "rrs_x2": rrs_x2, "rrs_x3": rrs_x3,
                           "rrs_damping": rrs_damping, "motions": motions, "seed": seed, "duration": duration,
@@ -1215,6 +1235,31 @@ def qualify(
 
 #: ``rbhyst qualify``: the deck does not qualify
 EXIT_VERDICT = 1
+
+
+def _qualify_shock(d, deck: Path, req, out, plots: bool, integrator, dt, tolerance) -> None:
+    """``rbhyst qualify`` under shock: the shock workflow's files, and qualification.json."""
+    import json
+
+    from rbhyst.analyses.shock.qualify import qualification
+    from rbhyst.analyses.shock.verdict import output_files, verdict_lines
+    from rbhyst.analyses.shock.verdict import shock as judge
+    from rbhyst.files.outdir import check_free, staged_directory
+
+    target = out if out is not None else _sibling_dir(d, deck, "-qualify")
+    say_replaced(target, "qualify")
+    check_free(target, output_files(req) + ["qualification.json"])
+    with staged_directory(target) as tmp:
+        v, drives, made = judge(d, req, tmp, integrator=integrator, dt=dt, tolerance=tolerance, say=say)
+        (tmp / "qualification.json").write_text(json.dumps(qualification(v.data), indent=2) + "\n",
+                                                encoding="utf-8")
+        if plots and d.output.plots:
+            _shock_plots(drives, made, tmp)
+    for line in verdict_lines(v):
+        say(line)
+    say(f"wrote {target}")
+    if not v.passed:
+        raise typer.Exit(EXIT_VERDICT)
 
 
 @app.command(cls=Command)
@@ -1281,23 +1326,32 @@ def shock(
         target = out if out is not None else _sibling_dir(d, deck, "-shock")
         check_free(target, output_files(req))
         with staged_directory(target) as tmp:
-            v, drive = judge(d, req, tmp, integrator=integrator, dt=dt, tolerance=tolerance, say=say)
+            v, drives, _ = judge(d, req, tmp, integrator=integrator, dt=dt, tolerance=tolerance, say=say)
             if plots and d.output.plots:
-                from rbhyst.analyses.shock.verdict import drive_srs
-                from rbhyst.report.shock_spectra import plot_pvss, plot_srs
-
-                if drive.pulse is not None:
-                    from rbhyst.report.shock_spectra import plot_pulse
-
-                    plot_pulse(drive.pulse, tmp / "pulse.png", title=drive.source)
-                srs = drive_srs(drive)
-                plot_srs(srs, tmp / "srs.png", title="the drive")
-                plot_pvss(srs, tmp / "pvss.png", title="the drive")
+                _shock_plots(drives, [], tmp)
     for line in verdict_lines(v):
         say(line)
     say(f"wrote {target}")
     if not v.passed:
         raise typer.Exit(EXIT_VERDICT)
+
+
+def _shock_plots(drives: dict, made: list, folder: Path) -> None:
+    """pulse.png, srs.png and pvss.png of a drive every axis shares; srs_check.png of SRS-matched ones."""
+    from rbhyst.analyses.shock.verdict import drive_srs
+    from rbhyst.report.shock_spectra import plot_pulse, plot_pvss, plot_srs, plot_srs_check
+
+    if made:
+        from rbhyst.analyses.shock.specification import LOWER_DB, UPPER_DB
+
+        plot_srs_check(made, folder / "srs_check.png", (LOWER_DB, UPPER_DB), title="the drives")
+        return
+    drive = next(iter(drives.values()))
+    if drive.pulse is not None:
+        plot_pulse(drive.pulse, folder / "pulse.png", title=drive.source)
+    srs = drive_srs(drive)
+    plot_srs(srs, folder / "srs.png", title="the drive")
+    plot_pvss(srs, folder / "pvss.png", title="the drive")
 
 
 def output_dir(deck, deck_path: Path) -> Path:

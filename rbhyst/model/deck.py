@@ -717,6 +717,28 @@ class ShakeTable(_Model):
     acceleration: PosFloat | None = None  # g, peak
 
 
+class QualifyShock(_Model):
+    """``[qualify] shock``: a shock qualification instead of a seismic one (rbhyst.analyses.shock):
+    an SRS specification (``srs``, a CSV) that make-shock matches per axis, or a named pulse."""
+
+    srs: str | None = None  # a CSV: frequency_hz and the maximax SRS with its unit (srs_g, ...)
+    q: Annotated[float, Field(gt=0.5)] = 10.0
+    method: Literal["wavelets", "damped-sines"] = "wavelets"
+    duration: PosFloat | None = None  # s, of each shock made (default: 6 periods of the lowest frequency)
+    seed: Annotated[int, Field(ge=0)] = 1
+    pulse: str | None = None  # a named pulse (rbhyst.model.shock_pulses.PRESETS)
+    compensation: Literal["none", "pre-post"] | None = None
+    axes: Annotated[list[Literal["x1", "x2", "x3"]], Field(min_length=1)] | None = None
+    shocks: Annotated[int, Field(ge=1, le=10)] = 3
+    table: ShakeTable | None = None
+
+    @model_validator(mode="after")
+    def _one_shock(self):
+        if self.srs is not None and self.pulse is not None:
+            raise _key_problems([("pulse", "not with qualify.shock.srs: give an SRS or a pulse")])
+        return self
+
+
 class Qualify(_Model):
     """What ``rbhyst qualify`` holds the deck to (see the documentation, "Qualification"): a required
     response spectrum (a standard's, or files), the motions, and the limits."""
@@ -746,6 +768,8 @@ class Qualify(_Model):
     statistic: Literal["max", "mean"] = "max"
     #: the shake table's limits, which every made motion keeps within
     table: ShakeTable | None = None
+    #: a shock qualification (an SRS specification or a named pulse) instead of a seismic one
+    shock: QualifyShock | None = None
 
     @model_validator(mode="after")
     def _one_spectrum(self):
