@@ -1155,12 +1155,12 @@ def qualify(
                                                               "(ieee693: 0.05 by default).")] = None,
     motions: Annotated[Optional[str], typer.Option(help="How many motions to make, or 'deck' (its own "
                                                         "excitation.support).")] = None,
-    seed: Annotated[Optional[int], typer.Option(help="Random seed of the motions.")] = None,
-    duration: Annotated[Optional[float], typer.Option(help="Length of each motion in s (AC156: 30).")] = None,
+    seed: Annotated[Optional[int], typer.Option(help="Random seed of the motions (of the shocks, with --shock).")] = None,
+    duration: Annotated[Optional[float], typer.Option(help="Length of each motion in s (AC156: 30; of each shock made, with --shock).")] = None,
     motion_dt: Annotated[Optional[float], typer.Option(help="Sample step of the motions in s.")] = None,
     table: Annotated[Optional[str], typer.Option(help="The shake table's limits, any of displacement=D (m, peak "
                                                       "to peak), velocity=V (m/s), acceleration=A (g): every motion "
-                                                      "made within them.")] = None,
+                                                      "(every shock, with --shock) made within them.")] = None,
     statistic: Annotated[Optional[str], typer.Option(help="The demand over the motions: max (the largest, the "
                                                           "default) or mean (from 7 motions on, ASCE 7-10 "
                                                           "16.2.4).")] = None,
@@ -1181,7 +1181,7 @@ def qualify(
 
     With --shock, --pulse or the deck's qualify.shock: the verdict under shock, each axis in both
     directions (three shocks each, or qualify.shock.shocks), by the workflow of `rbhyst shock`:
-    qualification.json and shock.json.
+    qualification.json and shock.json. Long: its signature is its many options.
 
     Exit 0: it qualifies; 1: it does not (each failed criterion said); 2: a mistake in the
     deck or options; 3: motions that cannot be matched, or a run that fails.
@@ -1194,19 +1194,11 @@ def qualify(
         d = load_deck(deck, need=ANALYSIS_SECTIONS)
         asked = {"standard": standard, "sds": sds, "z_over_h": z_over_h, "level": level, "rrs": rrs,
                  "rrs_x2": rrs_x2, "rrs_x3": rrs_x3, "rrs_damping": rrs_damping, "motions": motions, "seed": seed,
-                 "duration": duration, "motion_dt": motion_dt, "statistic": statistic, "table": table,
-                 "shock": shock, "pulse": pulse}
-        from rbhyst.analyses.shock import qualify as shock_qualify
-
-        if shock_qualify.wanted(d, asked):
-            if report:
-                raise InputError("--report: not yet for a shock qualification (shock.json and qualification.json "
-                                 "hold the verdict)")
-            return _qualify_shock(d, deck, shock_qualify.request(d, asked), out, plots, integrator, dt, tolerance)
-        req = request(d, {"standard": standard, "sds": sds, "z_over_h": z_over_h, "level": level, "rrs": rrs,
-                          "rrs_x2": rrs_x2, "rrs_x3": rrs_x3,
-                          "rrs_damping": rrs_damping, "motions": motions, "seed": seed, "duration": duration,
-                          "motion_dt": motion_dt, "statistic": statistic, "table": table})
+                 "duration": duration, "motion_dt": motion_dt, "statistic": statistic, "table": table}
+        if _shock_qualification(d, deck, {**asked, "shock": shock, "pulse": pulse}, report, out, plots,
+                                (integrator, dt, tolerance)):
+            return
+        req = request(d, asked)
         target = out if out is not None else _sibling_dir(d, deck, "-qualify")
         say_replaced(target, "qualify")
         check_free(target, output_files(req) + (["qualification.png"] if plots and d.output.plots else []))
@@ -1235,6 +1227,19 @@ def qualify(
 
 #: ``rbhyst qualify``: the deck does not qualify
 EXIT_VERDICT = 1
+
+
+def _shock_qualification(d, deck: Path, asked: dict, report: bool, out, plots: bool, run_options) -> bool:
+    """``rbhyst qualify`` under shock, when the options or the deck ask for it (True: done)."""
+    from rbhyst.analyses.shock import qualify as shock_qualify
+
+    if not shock_qualify.wanted(d, asked):
+        return False
+    if report:
+        raise InputError("--report: not yet for a shock qualification (shock.json and qualification.json hold the "
+                         "verdict)")
+    _qualify_shock(d, deck, shock_qualify.request(d, asked), out, plots, *run_options)
+    return True
 
 
 def _qualify_shock(d, deck: Path, req, out, plots: bool, integrator, dt, tolerance) -> None:

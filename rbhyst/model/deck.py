@@ -775,6 +775,9 @@ class Qualify(_Model):
     def _one_spectrum(self):
         if self.standard is not None and self.rrs is not None:
             raise _key_problems([("rrs", "not with qualify.standard: give a standard or RRS files")])
+        if self.shock is not None and (self.standard is not None or self.rrs is not None):
+            raise _key_problems([("shock", "not with qualify.standard or qualify.rrs: a deck qualifies to a "
+                                           "shock or to a seismic spectrum")])
         return self
 
 
@@ -959,6 +962,9 @@ KEY_UNITS: dict[tuple[str, ...], str] = {
     **{("shock", "pulse", name): unit for name, unit in (("amplitude", "signal"), ("duration", "s"), ("start", "s"),
                                                           ("rise", "s"), ("compensation_ratio", ""))},
     ("shock", "record", "scale"): "", ("shock", "record", "dt"): "s",
+    ("qualify", "shock", "q"): "", ("qualify", "shock", "seed"): "", ("qualify", "shock", "shocks"): "",
+    ("qualify", "shock", "duration"): "s", ("qualify", "shock", "table", "displacement"): "m",
+    ("qualify", "shock", "table", "velocity"): "m/s", ("qualify", "shock", "table", "acceleration"): "g",
 }
 #: units as written in a deck, as an axis shows them
 _SHOWN_UNITS = {"m/s2": "m/s²", "cm/s2": "cm/s²"}
