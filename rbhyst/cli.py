@@ -1196,7 +1196,7 @@ def qualify(
                  "rrs_x2": rrs_x2, "rrs_x3": rrs_x3, "rrs_damping": rrs_damping, "motions": motions, "seed": seed,
                  "duration": duration, "motion_dt": motion_dt, "statistic": statistic, "table": table}
         if _shock_qualification(d, deck, {**asked, "shock": shock, "pulse": pulse}, report, out, plots,
-                                (integrator, dt, tolerance)):
+                                (integrator, dt, tolerance, command_line(ctx))):
             return
         req = request(d, asked)
         target = out if out is not None else _sibling_dir(d, deck, "-qualify")
@@ -1235,14 +1235,11 @@ def _shock_qualification(d, deck: Path, asked: dict, report: bool, out, plots: b
 
     if not shock_qualify.wanted(d, asked):
         return False
-    if report:
-        raise InputError("--report: not yet for a shock qualification (shock.json and qualification.json hold the "
-                         "verdict)")
-    _qualify_shock(d, deck, shock_qualify.request(d, asked), out, plots, *run_options)
+    _qualify_shock(d, deck, shock_qualify.request(d, asked), out, plots, report, *run_options)
     return True
 
 
-def _qualify_shock(d, deck: Path, req, out, plots: bool, integrator, dt, tolerance) -> None:
+def _qualify_shock(d, deck: Path, req, out, plots: bool, report: bool, integrator, dt, tolerance, command) -> None:
     """``rbhyst qualify`` under shock: the shock workflow's files, and qualification.json."""
     import json
 
@@ -1254,12 +1251,21 @@ def _qualify_shock(d, deck: Path, req, out, plots: bool, integrator, dt, toleran
     target = out if out is not None else _sibling_dir(d, deck, "-qualify")
     say_replaced(target, "qualify")
     check_free(target, output_files(req) + ["qualification.json"])
+    if report:
+        from rbhyst.report.report_file import check_report_target
+
+        check_report_target(target)
     with staged_directory(target) as tmp:
-        v, drives, made = judge(d, req, tmp, integrator=integrator, dt=dt, tolerance=tolerance, say=say)
+        v, drives, made = judge(d, req, tmp, integrator=integrator, dt=dt, tolerance=tolerance, say=say,
+                                command=command)
         (tmp / "qualification.json").write_text(json.dumps(qualification(v.data), indent=2) + "\n",
                                                 encoding="utf-8")
         if plots and d.output.plots:
             _shock_plots(drives, made, tmp)
+    if report:
+        from rbhyst.report.report_file import write_report
+
+        write_report(target)
     for line in verdict_lines(v):
         say(line)
     say(f"wrote {target}")
@@ -1294,6 +1300,7 @@ def schema(
 
 @app.command(cls=Command)
 def shock(
+    ctx: typer.Context,
     deck: Annotated[Path, typer.Argument(help="TOML or YAML deck, with a shock section or the options below.")],
     pulse: Annotated[Optional[str], typer.Option(help="A named pulse: 810h-functional-flight, 810h-functional-ground, "
                                                       "810h-crash-flight, 810h-crash-ground, 810c-basic-design, "
@@ -1331,7 +1338,8 @@ def shock(
         target = out if out is not None else _sibling_dir(d, deck, "-shock")
         check_free(target, output_files(req))
         with staged_directory(target) as tmp:
-            v, drives, _ = judge(d, req, tmp, integrator=integrator, dt=dt, tolerance=tolerance, say=say)
+            v, drives, _ = judge(d, req, tmp, integrator=integrator, dt=dt, tolerance=tolerance, say=say,
+                                 command=command_line(ctx))
             if plots and d.output.plots:
                 _shock_plots(drives, [], tmp)
     for line in verdict_lines(v):

@@ -118,6 +118,13 @@ def test_a_record_drive_and_its_plots(tmp_path):
     facts = json.loads((out / "shock.json").read_text())["drive"]
     assert facts["source"] == "the record r.csv" and facts["peak_g"] == pytest.approx(10.0)
     assert (out / "srs.png").exists() and (out / "pvss.png").exists() and not (out / "pulse.png").exists()
+    # its report: the figures embedded, the record among the files it was made from
+    code, err = invoke("report", out)
+    assert code == 0, err
+    text = (out / "report.html").read_text()
+    assert 'data-file="srs.png"' in text and 'data-file="pvss.png"' in text
+    inputs = json.loads((out / "shock.json").read_text())["provenance"]["inputs"]
+    assert [i["key"] for i in inputs] == ["deck", "--record"] and str(rec) in text
 
 
 def test_the_sample_deck_asks_for_procedure_one():
@@ -163,6 +170,20 @@ def test_qualify_shock_runs_each_axis_both_ways_and_its_demands_are_each_runs(tm
         assert c["demand"] == max(c["per_run"].values())
     worst = min(q["criteria"], key=lambda c: c["margin"])
     assert q["worst"]["margin"] == worst["margin"] and q["worst"]["run"] == worst["worst_run"]
+    # report.html of the folder: every number it shows with its source in shock.json is that value
+    import re
+
+    code, err = invoke("report", out)
+    assert code == 0, err
+    text = (out / "report.html").read_text()
+    assert "Shock verdict" in text and q["provenance"]["inputs"][1]["file"] == "spec.csv"
+    shown = re.findall(r'data-src="shock\.json:([^"]+)" data-value="([^"]+)"', text)
+    assert len(shown) > 3 * len(data["criteria"])
+    for path, value in shown:
+        node = data
+        for part in path.split("."):
+            node = node[int(part)] if isinstance(node, list) else node[part]
+        assert float(value) == node, path
     # each axis its own drive, matched to the specification, the one make-shock makes for that axis
     assert data["drive"]["within"] is True
     code, err = invoke("make-shock", tmp_path / "m", "--srs", tmp_path / "spec.csv", "--axes", 3, "--no-plots")
@@ -181,7 +202,6 @@ def test_qualify_shock_runs_each_axis_both_ways_and_its_demands_are_each_runs(tm
 @pytest.mark.parametrize("args, said", [
     (("--pulse", "nope"), "--pulse: 'nope' is not a pulse"),
     (("--pulse", "810c-basic-design", "--standard", "ac156"), "--standard: not with a shock qualification"),
-    (("--report",), "--report: not yet"),
 ])
 def test_qualify_shock_mistakes(tmp_path, args, said):
     deck = write_deck(tmp_path, qualify_box(tmp_path))

@@ -90,13 +90,15 @@ def request(deck, cli: dict) -> ShockRequest:
     problems += _limit_problems(deck, limits, space)
     if problems:
         raise InputError(problems)
+    files = () if srs is None else (("--shock" if cli.get("shock") else "qualify.shock.srs", Path(srs_path),
+                                     str(cli.get("shock") or own.srs)),)
     return ShockRequest(pulse, None, list(axes), int(given.get("shocks", 3)), limits["acceleration_limit_g"] or {},
-                        limits["force_capacity_N"], deck_axes, srs)
+                        limits["force_capacity_N"], deck_axes, srs, files)
 
 
 def qualification(data: dict) -> dict:
     """qualification.json of a shock qualification: shock.json's verdict in a seismic one's shape."""
-    keep = ("rbhyst_version", "deck", "pass", "criteria", "worst", "accuracy", "warnings", "notes")
+    keep = ("rbhyst_version", "deck", "pass", "criteria", "worst", "accuracy", "warnings", "notes", "provenance")
     return {**{k: data[k] for k in keep if k in data}, "kind": "shock", "details": "shock.json",
             "axes": data["axes"], "shocked_axes": data["shocked_axes"],
             "shocks_per_direction": data["drive"]["shocks_per_direction"],

@@ -34,6 +34,7 @@ from rbhyst.analyses.qualification.verdict import (
 )
 from rbhyst.analyses.shock.drive import Drive, G, pulse_drive, record_drive
 from rbhyst.errors import InputError
+from rbhyst.model.inputs import deck_inputs
 
 #: Q of the drive's shock response spectrum in shock.json and srs.csv (ISO 18431-4's usual)
 DRIVE_Q = 10.0
@@ -56,6 +57,8 @@ class ShockRequest:
     #: an SRS specification matched per axis (rbhyst.analyses.shock.synthesis): (Specification, q,
     #: method, duration s, seed, Table or None)
     srs: tuple | None = None
+    #: the files the shock reads beside the deck: (key, path, as given)
+    files: tuple = ()
 
     @property
     def vertical(self) -> str:
@@ -118,6 +121,7 @@ def request(deck, cli: dict) -> ShockRequest:
     else:
         problems.append("shock: no shock: --pulse NAME (a named pulse), --record FILE --units U, or shock.pulse / "
                         "shock.record in the deck")
+    files = () if record is None else ((record[4], record[0], str(cli.get("record") or own.record.file)),)
     axes = cli["axes"] if "axes" in cli else given.get("axes") or list(deck_axes)
     problems += [f"{key['axes']}: {a!r}: an axis of the deck ({', '.join(deck_axes)})" for a in axes
                  if a not in deck_axes]
@@ -132,7 +136,7 @@ def request(deck, cli: dict) -> ShockRequest:
     if problems:
         raise InputError(problems)
     return ShockRequest(pulse, record, list(axes), int(shocks), limits["acceleration_limit_g"] or {},
-                        limits["force_capacity_N"], deck_axes)
+                        limits["force_capacity_N"], deck_axes, files=files)
 
 
 def output_files(req: ShockRequest) -> list[str]:
@@ -185,13 +189,19 @@ def make_drives(deck, req: ShockRequest) -> tuple[dict[str, Drive], float, list]
 
 
 def shock(deck, req: ShockRequest, folder: Path, integrator: str | None = None, dt: float | None = None,
-          tolerance: float | None = None, say=None) -> tuple[Verdict, dict[str, Drive], list]:
+          tolerance: float | None = None, say=None, command: str | None = None
+          ) -> tuple[Verdict, dict[str, Drive], list]:
     """Make the drives, run the deck along each direction of each axis, judge every criterion;
     write into ``folder`` (a staging folder): shock.json, drive.csv and srs.csv (the drive's one
     shock; an SRS matched per axis: drive_<axis>.csv, srs_<axis>.csv and srs_check.csv) and
     run_<axis>_<direction>/summary.json (the plots are the caller's). Returns the verdict, each
-    axis's drive and the matched records."""
+    axis's drive and the matched records. ``command``: the command line shock.json's
+    ``provenance`` records (None: Python)."""
+    from rbhyst.files.provenance import provenance
     from rbhyst.results.writers import deck_as_run, write_srs_csv, write_summary
+
+    inputs = [i for i in deck_inputs(deck) if i[0] == "deck"] + list(req.files)
+    started = provenance(command, inputs)
 
     folder = Path(folder).resolve()  # the runs' decks name the drive's file from their own folder
     drives, gap, made = make_drives(deck, req)
@@ -266,6 +276,7 @@ def shock(deck, req: ShockRequest, folder: Path, integrator: str | None = None, 
                        "criteria are the run's peaks, which see every compute step: a shock's peak between two rows "
                        "is the criteria's, not its own), and the largest change of a later shock's from the first's",
         "deck_as_run": deck_as_run(deck, integrator=integrator, dt=dt, tolerance=tolerance),
+        "provenance": started,
     }
     (folder / "shock.json").write_text(json.dumps(data, indent=2) + "\n", encoding="utf-8")
     return Verdict(data, criteria), drives, made
