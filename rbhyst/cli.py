@@ -1043,7 +1043,7 @@ MOTION_MARK = "# rbhyst make-motion"
 @app.command("make-shock", cls=Command)
 def make_shock(
     out: Annotated[Path, typer.Argument(help="Folder to write: shock_x1.csv (shock_x2.csv, shock_x3.csv), "
-                                             "srs_check.csv, srs_check.png, shocks.json.")],
+                                             "srs_check.csv, shocks.json, srs_check.png, records.png.")],
     srs: Annotated[Path, typer.Option(help="The SRS specification: a CSV of frequency_hz and the maximax SRS "
                                            "with its unit (srs_g, srs_m_s2), straight between breakpoints on "
                                            "log-log axes.")],
@@ -1056,7 +1056,7 @@ def make_shock(
                                                       "peak), velocity=V (m/s), acceleration=A (g).")] = None,
     seed: Annotated[int, typer.Option(help="Random seed: the same seed gives the same records.")] = 1,
     axes: Annotated[int, typer.Option(help="1: a record for x1; 3: for x1, x2 and x3 (each its own).")] = 1,
-    plots: Annotated[bool, typer.Option("--plots/--no-plots", help="Write srs_check.png.")] = True,
+    plots: Annotated[bool, typer.Option("--plots/--no-plots", help="Write srs_check.png and records.png.")] = True,
 ):
     """A shock a shaker can play whose maximax SRS lies within MIL-STD-810's -1.5/+3 dB of a
     specification at every 1/12-octave frequency of its range, starting and ending at rest.
@@ -1098,10 +1098,11 @@ def make_shock(
             data = synthesis.summary(made, spec, q, method, length, seed, limits)
             (tmp / "shocks.json").write_text(json.dumps(data, indent=2) + "\n", encoding="utf-8")
             if plots:
-                from rbhyst.report.shock_spectra import plot_srs_check
+                from rbhyst.report.shock_spectra import plot_shock_records, plot_srs_check
 
-                plot_srs_check(made, tmp / "srs_check.png", (LOWER_DB, UPPER_DB),
-                               title=f"{srs.name}, Q = {q:g}, {method}")
+                what = f"{srs.name}, Q = {q:g}, {method}"
+                plot_srs_check(made, tmp / "srs_check.png", (LOWER_DB, UPPER_DB), title=what)
+                plot_shock_records(made, tmp / "records.png", title=what)
     for line in synthesis.shock_lines(made):
         say(line)
     say(f"wrote {out}")

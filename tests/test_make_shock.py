@@ -89,7 +89,7 @@ def test_each_record_meets_its_specification_ends_at_rest_and_keeps_to_the_table
     assert np.allclose([float(r[4]) for r in rows], db, atol=0.15)  # the samples' peaks against the exact
     assert json.loads((out / "shocks.json").read_text())["records"][0]["within"] is True
     if name == "knee":
-        assert (out / "srs_check.png").stat().st_size > 10_000
+        assert (out / "srs_check.png").stat().st_size > 10_000 and (out / "records.png").stat().st_size > 10_000
 
 
 #: a narrow specification, quick to match

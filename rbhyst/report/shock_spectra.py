@@ -171,3 +171,27 @@ def plot_srs_check(shocks, path: Path, band_db: tuple[float, float], title: str 
     ax.set_title(f"SRS check{': ' + title if title else ''}", fontsize=9)
     save(fig, path)
     return fig
+
+
+@styled
+def plot_shock_records(shocks, path: Path, title: str = ""):
+    """Each record's acceleration (g), and the table's velocity (m/s) and displacement (m) from rest,
+    against time: where it starts and that it ends at rest (``shocks``:
+    rbhyst.analyses.shock.synthesis.Shock; returns the figure, saved to ``path``)."""
+    from rbhyst.model.baseline import integrate
+
+    fig, axes = subplots(3, 1, figsize=(6.8, 6.4), sharex=True)
+    for j, s in enumerate(shocks):
+        t = s.dt * np.arange(len(s.acc_g))
+        v, d = integrate(s.acc_g * G_STANDARD, s.dt)
+        for ax, values in zip(axes, (s.acc_g, v, d)):
+            ax.plot(t, values, color=f"C{j}", lw=0.8, label=s.axis)
+    for ax, label in zip(axes, ("acceleration [g]", "velocity [m/s]", "displacement [m]")):
+        ax.set_ylabel(label)
+        ax.axhline(0.0, color="0.6", lw=0.6)
+        ax.grid(True, alpha=0.25)
+    axes[0].legend(fontsize=7, loc="upper right")
+    axes[-1].set_xlabel("time [s]")
+    axes[0].set_title(f"The records{': ' + title if title else ''}", fontsize=9)
+    save(fig, path)
+    return fig
