@@ -131,6 +131,14 @@ def test_what_cannot_be_done_says_what_would(tmp_path, args, code, said):
     assert not (tmp_path / "o").exists()
 
 
+def test_a_specification_no_record_can_meet_says_where_and_what_would_try_again(tmp_path):
+    # 40 dB in an octave: at 100 Hz the SRS of the 200 Hz content alone is far above 1 g
+    spec = write_spec(tmp_path, [(100.0, 1.0), (200.0, 100.0)])
+    code, err = invoke("make-shock", tmp_path / "o", "--srs", spec, "--no-plots")
+    assert code == 3 and "worst +" in err and "at 100 Hz" in err and "--method damped-sines" in err, err
+    assert not (tmp_path / "o").exists()
+
+
 def test_a_specification_without_its_unit_names_its_line(tmp_path):
     path = tmp_path / "spec.csv"
     path.write_text("frequency_hz,srs\n10,1\n100,10\n")

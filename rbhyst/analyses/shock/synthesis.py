@@ -188,7 +188,7 @@ def make_shock(spec: Specification, q: float, duration: float, method: str, seed
     the table's limits (AnalysisError, with what was reached and what would fit, when none does)."""
     dt = sample_step(spec)
     f = spec.frequencies()
-    best = None
+    best = closest = None
     tries = len(HALF_SINES)
     for attempt in range(tries):
         rng = np.random.default_rng([seed, stream, attempt])
@@ -200,13 +200,27 @@ def make_shock(spec: Specification, q: float, duration: float, method: str, seed
             return shock
         if ok and (best is None or _excess(table, reached) < _excess(table, best.reached)):
             best = shock
+        if not ok and (closest is None or _outside(shock) < _outside(closest)):
+            closest = shock
     if best is None:
-        db = ratio_db(srs, spec(f))
-        raise AnalysisError(f"{axis}: the SRS did not come within {LOWER_DB:g}/+{UPPER_DB:g} dB in {MAX_ITERATIONS} "
-                            f"iterations ({db.min():+.2f} to {db.max():+.2f} dB): try --method "
-                            f"{'damped-sines' if method == 'wavelets' else 'wavelets'}, a longer --duration or "
-                            "another --seed")
+        raise AnalysisError(_band_failure(closest, method, tries))
     raise AnalysisError(_table_failure(axis, table, best, spec, duration))
+
+
+def _outside(shock: Shock) -> float:
+    """How far outside the band a record's SRS is at its worst frequency, dB."""
+    db = shock.ratio_db
+    return max(float(np.max(LOWER_DB - db)), float(np.max(db - UPPER_DB)), 0.0)
+
+
+def _band_failure(closest: Shock, method: str, tries: int) -> str:
+    db = closest.ratio_db
+    worst = int(np.argmax(np.maximum(LOWER_DB - db, db - UPPER_DB)))
+    other = "damped-sines" if method == "wavelets" else "wavelets"
+    return (f"{closest.axis}: no try of {tries} brought the SRS within {LOWER_DB:g}/+{UPPER_DB:g} dB; the closest "
+            f"spans {db.min():+.2f} to {db.max():+.2f} dB, worst {db[worst]:+.2f} dB at "
+            f"{closest.frequency_hz[worst]:.4g} Hz: --method {other}, another --duration or another --seed would "
+            "try again")
 
 
 def _excess(table: Table, reached: dict) -> float:
