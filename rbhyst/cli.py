@@ -1040,6 +1040,78 @@ def make_motion(
 MOTION_MARK = "# rbhyst make-motion"
 
 
+@app.command("make-shock", cls=Command)
+def make_shock(
+    out: Annotated[Path, typer.Argument(help="Folder to write: shock_x1.csv (shock_x2.csv, shock_x3.csv), "
+                                             "srs_check.csv, shocks.json, srs_check.png, records.png.")],
+    srs: Annotated[Path, typer.Option(help="The SRS specification: a CSV of frequency_hz and the maximax SRS "
+                                           "with its unit (srs_g, srs_m_s2), straight between breakpoints on "
+                                           "log-log axes.")],
+    q: Annotated[float, typer.Option("--q", help="The specification's quality factor Q = 1 / (2 damping).")] = 10.0,
+    duration: Annotated[Optional[float], typer.Option(help="Length in s (default: 6 periods of the lowest "
+                                                           "frequency).")] = None,
+    method: Annotated[str, typer.Option(help="wavelets (each ends at rest by itself) or damped-sines "
+                                             "(Smallwood's, compensated to end at rest).")] = "wavelets",
+    table: Annotated[Optional[str], typer.Option(help="The shaker's limits, any of displacement=D (m, peak to "
+                                                      "peak), velocity=V (m/s), acceleration=A (g).")] = None,
+    seed: Annotated[int, typer.Option(help="Random seed: the same seed gives the same records.")] = 1,
+    axes: Annotated[int, typer.Option(help="1: a record for x1; 3: for x1, x2 and x3 (each its own).")] = 1,
+    plots: Annotated[bool, typer.Option("--plots/--no-plots", help="Write srs_check.png and records.png.")] = True,
+):
+    """A shock a shaker can play whose maximax SRS lies within MIL-STD-810's -1.5/+3 dB of a
+    specification at every 1/12-octave frequency of its range, starting and ending at rest.
+
+    Exit 3 when no record can, with what would work.
+    """
+    import json
+    import math
+    import shlex
+
+    from rbhyst.analyses.qualification.table import read_table
+    from rbhyst.analyses.shock import synthesis
+    from rbhyst.analyses.shock.specification import LOWER_DB, UPPER_DB, read_specification
+    from rbhyst.files.outdir import staged_directory
+
+    with user_errors():
+        limits, problems = read_table(table)
+        spec = read_specification(srs)
+        if axes not in (1, 3):
+            problems.append(f"--axes: {axes}: 1 (x1) or 3 (x1, x2, x3)")
+        length = synthesis.default_duration(spec) if duration is None else duration
+        problems += synthesis.shock_problems(q, method, {})
+        if not (math.isfinite(length) and length > 0):
+            problems.append(f"--duration: {length:g}: a length in s, above 0")
+        if problems:
+            raise InputError(problems)
+        short = synthesis.duration_problem(spec, length)
+        if short:
+            raise AnalysisError(short)
+        made = synthesis.make_shocks(spec, q, length, method, seed, ["x1", "x2", "x3"][:axes], limits)
+        options = {"--srs": srs, "--q": q, "--duration": length, "--method": method, "--table": table,
+                   "--seed": seed, "--axes": axes}
+        mark = f"{SHOCK_MARK} " + " ".join(f"{k} {shlex.quote(str(v))}" for k, v in options.items() if v is not None)
+        say_replaced(out, "make-shock")
+        with staged_directory(out) as tmp:
+            for s in made:
+                (tmp / synthesis.record_name(s)).write_text(synthesis.record_text(s, mark), encoding="utf-8")
+            (tmp / "srs_check.csv").write_text("\n".join(synthesis.check_rows(made)) + "\n", encoding="utf-8")
+            data = synthesis.summary(made, spec, q, method, length, seed, limits)
+            (tmp / "shocks.json").write_text(json.dumps(data, indent=2) + "\n", encoding="utf-8")
+            if plots:
+                from rbhyst.report.shock_spectra import plot_shock_records, plot_srs_check
+
+                what = f"{srs.name}, Q = {q:g}, {method}"
+                plot_srs_check(made, tmp / "srs_check.png", (LOWER_DB, UPPER_DB), title=what)
+                plot_shock_records(made, tmp / "records.png", title=what)
+    for line in synthesis.shock_lines(made):
+        say(line)
+    say(f"wrote {out}")
+
+
+#: the first line of every record make-shock writes
+SHOCK_MARK = "# rbhyst make-shock"
+
+
 def _motion_lines(made) -> list[str]:
     """make-motion's console lines: each record's TRS check, peak and strong motion, then each
     motion's correlation and coherence between its axes."""
@@ -1084,12 +1156,12 @@ def qualify(
                                                               "(ieee693: 0.05 by default).")] = None,
     motions: Annotated[Optional[str], typer.Option(help="How many motions to make, or 'deck' (its own "
                                                         "excitation.support).")] = None,
-    seed: Annotated[Optional[int], typer.Option(help="Random seed of the motions.")] = None,
-    duration: Annotated[Optional[float], typer.Option(help="Length of each motion in s (AC156: 30).")] = None,
+    seed: Annotated[Optional[int], typer.Option(help="Random seed of the motions (of the shocks, with --shock).")] = None,
+    duration: Annotated[Optional[float], typer.Option(help="Length of each motion in s (AC156: 30; of each shock made, with --shock).")] = None,
     motion_dt: Annotated[Optional[float], typer.Option(help="Sample step of the motions in s.")] = None,
     table: Annotated[Optional[str], typer.Option(help="The shake table's limits, any of displacement=D (m, peak "
                                                       "to peak), velocity=V (m/s), acceleration=A (g): every motion "
-                                                      "made within them.")] = None,
+                                                      "(every shock, with --shock) made within them.")] = None,
     statistic: Annotated[Optional[str], typer.Option(help="The demand over the motions: max (the largest, the "
                                                           "default) or mean (from 7 motions on, ASCE 7-10 "
                                                           "16.2.4).")] = None,
@@ -1100,8 +1172,17 @@ def qualify(
         "--out", help="Output folder (default: the deck's output folder + '-qualify').")] = None,
     plots: Annotated[bool, typer.Option("--plots/--no-plots", help="Write qualification.png.")] = True,
     report: Annotated[bool, typer.Option("--report", help="Also write report.html (see `rbhyst report`).")] = False,
+    shock: Annotated[Optional[Path], typer.Option(help="A shock qualification to an SRS specification (a CSV, as "
+                                                       "make-shock reads it): a shock matched per axis, each axis "
+                                                       "in both directions.")] = None,
+    pulse: Annotated[Optional[str], typer.Option(help="A shock qualification to a named pulse (see rbhyst "
+                                                      "shock --pulse).")] = None,
 ):
     """The verdict of a deck against a required response spectrum: qualification.json and .png.
+
+    With --shock, --pulse or the deck's qualify.shock: the verdict under shock, each axis in both
+    directions (three shocks each, or qualify.shock.shocks), by the workflow of `rbhyst shock`:
+    qualification.json and shock.json. Long: its signature is its many options.
 
     Exit 0: it qualifies; 1: it does not (each failed criterion said); 2: a mistake in the
     deck or options; 3: motions that cannot be matched, or a run that fails.
@@ -1112,10 +1193,13 @@ def qualify(
 
     with user_errors():
         d = load_deck(deck, need=ANALYSIS_SECTIONS)
-        req = request(d, {"standard": standard, "sds": sds, "z_over_h": z_over_h, "level": level, "rrs": rrs,
-                          "rrs_x2": rrs_x2, "rrs_x3": rrs_x3,
-                          "rrs_damping": rrs_damping, "motions": motions, "seed": seed, "duration": duration,
-                          "motion_dt": motion_dt, "statistic": statistic, "table": table})
+        asked = {"standard": standard, "sds": sds, "z_over_h": z_over_h, "level": level, "rrs": rrs,
+                 "rrs_x2": rrs_x2, "rrs_x3": rrs_x3, "rrs_damping": rrs_damping, "motions": motions, "seed": seed,
+                 "duration": duration, "motion_dt": motion_dt, "statistic": statistic, "table": table}
+        if _shock_qualification(d, deck, {**asked, "shock": shock, "pulse": pulse}, report, out, plots,
+                                (integrator, dt, tolerance, command_line(ctx))):
+            return
+        req = request(d, asked)
         target = out if out is not None else _sibling_dir(d, deck, "-qualify")
         say_replaced(target, "qualify")
         check_free(target, output_files(req) + (["qualification.png"] if plots and d.output.plots else []))
@@ -1146,6 +1230,50 @@ def qualify(
 EXIT_VERDICT = 1
 
 
+def _shock_qualification(d, deck: Path, asked: dict, report: bool, out, plots: bool, run_options) -> bool:
+    """``rbhyst qualify`` under shock, when the options or the deck ask for it (True: done)."""
+    from rbhyst.analyses.shock import qualify as shock_qualify
+
+    if not shock_qualify.wanted(d, asked):
+        return False
+    _qualify_shock(d, deck, shock_qualify.request(d, asked), out, plots, report, *run_options)
+    return True
+
+
+def _qualify_shock(d, deck: Path, req, out, plots: bool, report: bool, integrator, dt, tolerance, command) -> None:
+    """``rbhyst qualify`` under shock: the shock workflow's files, and qualification.json."""
+    import json
+
+    from rbhyst.analyses.shock.qualify import qualification
+    from rbhyst.analyses.shock.verdict import output_files, verdict_lines
+    from rbhyst.analyses.shock.verdict import shock as judge
+    from rbhyst.files.outdir import check_free, staged_directory
+
+    target = out if out is not None else _sibling_dir(d, deck, "-qualify")
+    say_replaced(target, "qualify")
+    check_free(target, output_files(req) + ["qualification.json"])
+    if report:
+        from rbhyst.report.report_file import check_report_target
+
+        check_report_target(target)
+    with staged_directory(target) as tmp:
+        v, drives, made = judge(d, req, tmp, integrator=integrator, dt=dt, tolerance=tolerance, say=say,
+                                command=command)
+        (tmp / "qualification.json").write_text(json.dumps(qualification(v.data), indent=2) + "\n",
+                                                encoding="utf-8")
+        if plots and d.output.plots:
+            _shock_plots(drives, made, tmp)
+    if report:
+        from rbhyst.report.report_file import write_report
+
+        write_report(target)
+    for line in verdict_lines(v):
+        say(line)
+    say(f"wrote {target}")
+    if not v.passed:
+        raise typer.Exit(EXIT_VERDICT)
+
+
 @app.command(cls=Command)
 def schema(
     out: Annotated[Optional[Path], typer.Option(
@@ -1173,6 +1301,7 @@ def schema(
 
 @app.command(cls=Command)
 def shock(
+    ctx: typer.Context,
     deck: Annotated[Path, typer.Argument(help="TOML or YAML deck, with a shock section or the options below.")],
     pulse: Annotated[Optional[str], typer.Option(help="A named pulse: 810h-functional-flight, 810h-functional-ground, "
                                                       "810h-crash-flight, 810h-crash-ground, 810c-basic-design, "
@@ -1210,23 +1339,33 @@ def shock(
         target = out if out is not None else _sibling_dir(d, deck, "-shock")
         check_free(target, output_files(req))
         with staged_directory(target) as tmp:
-            v, drive = judge(d, req, tmp, integrator=integrator, dt=dt, tolerance=tolerance, say=say)
+            v, drives, _ = judge(d, req, tmp, integrator=integrator, dt=dt, tolerance=tolerance, say=say,
+                                 command=command_line(ctx))
             if plots and d.output.plots:
-                from rbhyst.analyses.shock.verdict import drive_srs
-                from rbhyst.report.shock_spectra import plot_pvss, plot_srs
-
-                if drive.pulse is not None:
-                    from rbhyst.report.shock_spectra import plot_pulse
-
-                    plot_pulse(drive.pulse, tmp / "pulse.png", title=drive.source)
-                srs = drive_srs(drive)
-                plot_srs(srs, tmp / "srs.png", title="the drive")
-                plot_pvss(srs, tmp / "pvss.png", title="the drive")
+                _shock_plots(drives, [], tmp)
     for line in verdict_lines(v):
         say(line)
     say(f"wrote {target}")
     if not v.passed:
         raise typer.Exit(EXIT_VERDICT)
+
+
+def _shock_plots(drives: dict, made: list, folder: Path) -> None:
+    """pulse.png, srs.png and pvss.png of a drive every axis shares; srs_check.png of SRS-matched ones."""
+    from rbhyst.analyses.shock.verdict import drive_srs
+    from rbhyst.report.shock_spectra import plot_pulse, plot_pvss, plot_srs, plot_srs_check
+
+    if made:
+        from rbhyst.analyses.shock.specification import LOWER_DB, UPPER_DB
+
+        plot_srs_check(made, folder / "srs_check.png", (LOWER_DB, UPPER_DB), title="the drives")
+        return
+    drive = next(iter(drives.values()))
+    if drive.pulse is not None:
+        plot_pulse(drive.pulse, folder / "pulse.png", title=drive.source)
+    srs = drive_srs(drive)
+    plot_srs(srs, folder / "srs.png", title="the drive")
+    plot_pvss(srs, folder / "pvss.png", title="the drive")
 
 
 def output_dir(deck, deck_path: Path) -> Path:

@@ -198,7 +198,7 @@ def test_report_refuses_what_is_not_a_results_folder_or_not_its_own(run_folder, 
     assert code == 2 and err.splitlines() == [f"error: {tmp_path / 'nowhere'}: no such folder"]
     (tmp_path / "notes").mkdir()
     code, err = invoke("report", tmp_path / "notes")
-    assert code == 2 and err.startswith(f"error: {tmp_path / 'notes'}: holds no results of rbhyst run, rbhyst sweep or rbhyst qualify")
+    assert code == 2 and err.startswith(f"error: {tmp_path / 'notes'}: holds no results of rbhyst run, rbhyst sweep, rbhyst qualify or rbhyst shock")
     out = tmp_path / "out"
     shutil.copytree(run_folder[0], out)
     manifest = json.loads((out / ".rbhyst.json").read_text())

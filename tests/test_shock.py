@@ -118,6 +118,13 @@ def test_a_record_drive_and_its_plots(tmp_path):
     facts = json.loads((out / "shock.json").read_text())["drive"]
     assert facts["source"] == "the record r.csv" and facts["peak_g"] == pytest.approx(10.0)
     assert (out / "srs.png").exists() and (out / "pvss.png").exists() and not (out / "pulse.png").exists()
+    # its report: the figures embedded, the record among the files it was made from
+    code, err = invoke("report", out)
+    assert code == 0, err
+    text = (out / "report.html").read_text()
+    assert 'data-file="srs.png"' in text and 'data-file="pvss.png"' in text
+    inputs = json.loads((out / "shock.json").read_text())["provenance"]["inputs"]
+    assert [i["key"] for i in inputs] == ["deck", "--record"] and str(rec) in text
 
 
 def test_the_sample_deck_asks_for_procedure_one():
@@ -130,3 +137,112 @@ def test_the_sample_deck_asks_for_procedure_one():
     assert req.pulse[:4] == ("terminal-peak-sawtooth", 20.0 * G, 0.011, "pre-post")
     assert req.shocks == 3 and run_labels(req) == ["x1+", "x1-", "x2+", "x2-"]
     assert req.acceleration_limit_g == {"top": 15.0, "G": 12.0}
+
+
+def qualify_box(tmp_path, **shock) -> dict:
+    """box() with its limits and shock under [qualify] (an SRS specification from 100 Hz up)."""
+    (tmp_path / "spec.csv").write_text("frequency_hz,srs_g\n100,10\n400,30\n1000,30\n")
+    data = box()
+    own = data.pop("shock")
+    data["qualify"] = {"acceleration_limit_g": own["acceleration_limit_g"], "force_capacity_N": 1.0e6,
+                       "shock": {"srs": "spec.csv", **shock}}
+    return data
+
+
+def test_qualify_shock_runs_each_axis_both_ways_and_its_demands_are_each_runs(tmp_path):
+    out = tmp_path / "q"
+    deck = write_deck(tmp_path, qualify_box(tmp_path, shocks=2))
+    code, err = invoke("qualify", deck, "--out", out, "--no-plots")
+    assert code in (0, 1), err
+    q = json.loads((out / "qualification.json").read_text())
+    data = json.loads((out / "shock.json").read_text())
+    assert q["kind"] == "shock" and q["details"] == "shock.json" and q["pass"] == data["pass"]
+    # every axis of the deck, both directions, the deck's number of shocks in each: 2 x 2 x 2 = 8
+    assert [r["run"] for r in q["runs"]] == ["x1+", "x1-", "x2+", "x2-"]
+    assert sum(len(r["shocks"]) for r in data["runs"]) == 8
+    summaries = {r["run"]: json.loads((out / r["summary"]).read_text()) for r in q["runs"]}
+    for c in q["criteria"]:
+        for run, value in c["per_run"].items():
+            if c["criterion"] == "acceleration":
+                assert value == summaries[run]["peaks"][c["column"]] / G
+            elif c["criterion"] == "force":
+                assert value == summaries[run]["peaks"][c["column"]]
+        assert c["demand"] == max(c["per_run"].values())
+    worst = min(q["criteria"], key=lambda c: c["margin"])
+    assert q["worst"]["margin"] == worst["margin"] and q["worst"]["run"] == worst["worst_run"]
+    # report.html of the folder: every number it shows with its source in shock.json is that value
+    import re
+
+    code, err = invoke("report", out)
+    assert code == 0, err
+    text = (out / "report.html").read_text()
+    assert "Shock verdict" in text and q["provenance"]["inputs"][1]["file"] == "spec.csv"
+    shown = re.findall(r'data-src="shock\.json:([^"]+)" data-value="([^"]+)"', text)
+    assert len(shown) > 3 * len(data["criteria"])
+    for path, value in shown:
+        node = data
+        for part in path.split("."):
+            node = node[int(part)] if isinstance(node, list) else node[part]
+        assert float(value) == node, path
+    # each axis its own drive, matched to the specification, the one make-shock makes for that axis
+    assert data["drive"]["within"] is True
+    code, err = invoke("make-shock", tmp_path / "m", "--srs", tmp_path / "spec.csv", "--axes", 3, "--no-plots")
+    assert code == 0, err
+
+    def values(path):
+        return [line.split(",")[1] for line in path.read_text().splitlines()[2:]]
+
+    made = values(tmp_path / "m" / "shock_x1.csv")
+    assert np.allclose(np.array(values(out / "drive_x1.csv"), float)[:len(made)], np.array(made, float), rtol=1e-9)
+    # the plane's vertical x2 is make-shock's vertical x3 (the same stream)
+    made = values(tmp_path / "m" / "shock_x3.csv")
+    assert np.allclose(np.array(values(out / "drive_x2.csv"), float)[:len(made)], np.array(made, float), rtol=1e-9)
+
+
+@pytest.mark.parametrize("args, said", [
+    (("--pulse", "nope"), "--pulse: 'nope' is not a pulse"),
+    (("--pulse", "810c-basic-design", "--standard", "ac156"), "--standard: not with a shock qualification"),
+])
+def test_qualify_shock_mistakes(tmp_path, args, said):
+    deck = write_deck(tmp_path, qualify_box(tmp_path))
+    code, err = invoke("qualify", deck, "--out", tmp_path / "q", *args)
+    assert code == 2 and said in err, err
+
+
+def test_qualify_pulse_is_the_shock_commands_verdict(tmp_path):
+    data = box()
+    own = data.pop("shock")
+    data["qualify"] = {"acceleration_limit_g": own["acceleration_limit_g"], "force_capacity_N": 1.0e6,
+                       "shock": {"axes": ["x2"], "shocks": 1}}
+    deck = write_deck(tmp_path, data)
+    code, err = invoke("qualify", deck, "--pulse", "810c-basic-design", "--out", tmp_path / "q", "--no-plots")
+    assert code == 0, err
+    code, err = invoke("shock", write_deck(tmp_path, box(), name="own"), "--out", tmp_path / "s", "--no-plots")
+    assert code == 0, err
+    a, b = (json.loads((tmp_path / d / "shock.json").read_text()) for d in ("q", "s"))
+    assert [c["demand"] for c in a["criteria"]] == [c["demand"] for c in b["criteria"]]
+
+
+def test_the_shipboard_sample_deck_runs_18_shocks_names_the_worst_and_its_demands_are_each_runs(tmp_path):
+    from conftest import DECKS
+
+    out = tmp_path / "q"
+    code, err = invoke("qualify", DECKS / "electronics_shipboard.toml", "--out", out, "--no-plots")
+    assert code == 1, err  # it fails on purpose: the box's vertical mode sits on the SRS's ramp
+    q = json.loads((out / "qualification.json").read_text())
+    data = json.loads((out / "shock.json").read_text())
+    assert [r["run"] for r in q["runs"]] == ["x1+", "x1-", "x2+", "x2-", "x3+", "x3-"]
+    assert sum(len(r["shocks"]) for r in data["runs"]) == 18
+    summaries = {r["run"]: json.loads((out / r["summary"]).read_text()) for r in q["runs"]}
+    for c in q["criteria"]:
+        assert set(c["per_run"]) == set(summaries)
+        for run, value in c["per_run"].items():
+            if c["criterion"] == "acceleration":
+                assert value == summaries[run]["peaks"][c["column"]] / G
+            elif c["criterion"] == "force":
+                assert value == summaries[run]["peaks"][c["column"]]
+        assert c["demand"] == max(c["per_run"].values())
+    worst = min(q["criteria"], key=lambda c: c["margin"])
+    assert (q["worst"]["margin"], q["worst"]["run"]) == (worst["margin"], worst["worst_run"])
+    assert f"least margin {worst['margin']:.3g} ({q['worst']['criterion']}, run {worst['worst_run']})" in err
+    assert data["drive"]["within"] is True and sorted(data["drive"]["per_axis"]) == ["x1", "x2", "x3"]

@@ -769,6 +769,28 @@ class ShakeTable(_Model):
     acceleration: PosFloat | None = None  # g, peak
 
 
+class QualifyShock(_Model):
+    """``[qualify] shock``: a shock qualification instead of a seismic one (rbhyst.analyses.shock):
+    an SRS specification (``srs``, a CSV) that make-shock matches per axis, or a named pulse."""
+
+    srs: str | None = None  # a CSV: frequency_hz and the maximax SRS with its unit (srs_g, ...)
+    q: Annotated[float, Field(gt=0.5)] = 10.0
+    method: Literal["wavelets", "damped-sines"] = "wavelets"
+    duration: PosFloat | None = None  # s, of each shock made (default: 6 periods of the lowest frequency)
+    seed: Annotated[int, Field(ge=0)] = 1
+    pulse: str | None = None  # a named pulse (rbhyst.model.shock_pulses.PRESETS)
+    compensation: Literal["none", "pre-post"] | None = None
+    axes: Annotated[list[Literal["x1", "x2", "x3"]], Field(min_length=1)] | None = None
+    shocks: Annotated[int, Field(ge=1, le=10)] = 3
+    table: ShakeTable | None = None
+
+    @model_validator(mode="after")
+    def _one_shock(self):
+        if self.srs is not None and self.pulse is not None:
+            raise _key_problems([("pulse", "not with qualify.shock.srs: give an SRS or a pulse")])
+        return self
+
+
 class Qualify(_Model):
     """What ``rbhyst qualify`` holds the deck to (see the documentation, "Qualification"): a required
     response spectrum (a standard's, or files), the motions, and the limits."""
@@ -798,11 +820,16 @@ class Qualify(_Model):
     statistic: Literal["max", "mean"] = "max"
     #: the shake table's limits, which every made motion keeps within
     table: ShakeTable | None = None
+    #: a shock qualification (an SRS specification or a named pulse) instead of a seismic one
+    shock: QualifyShock | None = None
 
     @model_validator(mode="after")
     def _one_spectrum(self):
         if self.standard is not None and self.rrs is not None:
             raise _key_problems([("rrs", "not with qualify.standard: give a standard or RRS files")])
+        if self.shock is not None and (self.standard is not None or self.rrs is not None):
+            raise _key_problems([("shock", "not with qualify.standard or qualify.rrs: a deck qualifies to a "
+                                           "shock or to a seismic spectrum")])
         return self
 
 
@@ -988,6 +1015,9 @@ KEY_UNITS: dict[tuple[str, ...], str] = {
     **{("shock", "pulse", name): unit for name, unit in (("amplitude", "signal"), ("duration", "s"), ("start", "s"),
                                                           ("rise", "s"), ("compensation_ratio", ""))},
     ("shock", "record", "scale"): "", ("shock", "record", "dt"): "s",
+    ("qualify", "shock", "q"): "", ("qualify", "shock", "seed"): "", ("qualify", "shock", "shocks"): "",
+    ("qualify", "shock", "duration"): "s", ("qualify", "shock", "table", "displacement"): "m",
+    ("qualify", "shock", "table", "velocity"): "m/s", ("qualify", "shock", "table", "acceleration"): "g",
 }
 #: units as written in a deck, as an axis shows them
 _SHOWN_UNITS = {"m/s2": "m/s²", "cm/s2": "cm/s²"}

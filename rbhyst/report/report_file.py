@@ -11,8 +11,8 @@ REPORT_FILE = "report.html"
 
 
 def write_report(folder: str | Path) -> Path:
-    """Write report.html into a results folder of ``rbhyst run``, ``rbhyst sweep`` or ``rbhyst
-    qualify`` and list it in the folder's manifest beside the files already there (which stay)."""
+    """Write report.html into a results folder of ``rbhyst run``, ``rbhyst sweep``, ``rbhyst
+    qualify`` or ``rbhyst shock`` and list it in the folder's manifest beside the files already there (which stay)."""
     from rbhyst.files.outdir import read_manifest, staged_directory
 
     folder = Path(folder)
@@ -27,14 +27,18 @@ def write_report(folder: str | Path) -> Path:
         from rbhyst.report.html import sweep_report
 
         text = sweep_report(folder, owned)
+    elif "shock.json" in owned and (folder / "shock.json").is_file():  # rbhyst shock, or qualify under shock
+        from rbhyst.report.shock_page import shock_report
+
+        text = shock_report(folder, owned)
     elif "qualification.json" in owned and (folder / "qualification.json").is_file():
         from rbhyst.report.qualification_page import qualification_report
 
         text = qualification_report(folder, owned)
     else:
-        raise InputError(f"{folder}: holds no results of rbhyst run, rbhyst sweep or rbhyst qualify (summary.json, "
-                         "sweep.json or qualification.json written by rbhyst, listed in .rbhyst.json): give the "
-                         "folder one of them wrote")
+        raise InputError(f"{folder}: holds no results of rbhyst run, rbhyst sweep, rbhyst qualify or rbhyst shock "
+                         "(summary.json, sweep.json, qualification.json or shock.json written by rbhyst, listed in "
+                         ".rbhyst.json): give the folder one of them wrote")
     with staged_directory(folder, add=True) as tmp:
         (tmp / REPORT_FILE).write_text(text, encoding="utf-8")
     return folder / REPORT_FILE

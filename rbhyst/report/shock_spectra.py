@@ -196,3 +196,54 @@ def plot_pulse(pulse, path: Path, title: str = ""):
                       f"{end}", fontsize=9)
     save(fig, path)
     return fig
+
+
+@styled
+def plot_srs_check(shocks, path: Path, band_db: tuple[float, float], title: str = ""):
+    """Each record's SRS against the specification and its tolerance band, g against Hz on log
+    axes (``shocks``: rbhyst.analyses.shock.synthesis.Shock; returns the figure, saved to ``path``)."""
+    fig, ax = subplots(figsize=(6.8, 4.8))
+    lo, hi = (10.0 ** (b / 20.0) for b in band_db)
+    f, spec = shocks[0].frequency_hz, shocks[0].spec / G_STANDARD
+    ax.fill_between(f, lo * spec, hi * spec, color="0.85", label=f"tolerance {band_db[0]:g}/+{band_db[1]:g} dB")
+    ax.plot(f, spec, color="k", lw=1.2, label="specification")
+    for j, s in enumerate(shocks):
+        ax.plot(f, s.srs / G_STANDARD, color=f"C{j}", lw=1.4, label=f"{s.axis}: maximax SRS")
+        out = ~s.within
+        if out.any():
+            ax.plot(f[out], s.srs[out] / G_STANDARD, "x", color="red", label=f"{s.axis}: outside the band")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    plain_log_ticks(ax.xaxis)
+    plain_log_ticks(ax.yaxis)
+    ax.grid(True, which="both", alpha=0.25)
+    ax.set_xlabel("natural frequency [Hz]")
+    ax.set_ylabel("peak absolute acceleration [g]")
+    ax.legend(fontsize=7, loc="best")
+    ax.set_title(f"SRS check{': ' + title if title else ''}", fontsize=9)
+    save(fig, path)
+    return fig
+
+
+@styled
+def plot_shock_records(shocks, path: Path, title: str = ""):
+    """Each record's acceleration (g), and the table's velocity (m/s) and displacement (m) from rest,
+    against time: where it starts and that it ends at rest (``shocks``:
+    rbhyst.analyses.shock.synthesis.Shock; returns the figure, saved to ``path``)."""
+    from rbhyst.model.baseline import integrate
+
+    fig, axes = subplots(3, 1, figsize=(6.8, 6.4), sharex=True)
+    for j, s in enumerate(shocks):
+        t = s.dt * np.arange(len(s.acc_g))
+        v, d = integrate(s.acc_g * G_STANDARD, s.dt)
+        for ax, values in zip(axes, (s.acc_g, v, d)):
+            ax.plot(t, values, color=f"C{j}", lw=0.8, label=s.axis)
+    for ax, label in zip(axes, ("acceleration [g]", "velocity [m/s]", "displacement [m]")):
+        ax.set_ylabel(label)
+        ax.axhline(0.0, color="0.6", lw=0.6)
+        ax.grid(True, alpha=0.25)
+    axes[0].legend(fontsize=7, loc="upper right")
+    axes[-1].set_xlabel("time [s]")
+    axes[0].set_title(f"The records{': ' + title if title else ''}", fontsize=9)
+    save(fig, path)
+    return fig

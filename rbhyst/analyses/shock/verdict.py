@@ -34,6 +34,7 @@ from rbhyst.analyses.qualification.verdict import (
 )
 from rbhyst.analyses.shock.drive import Drive, G, pulse_drive, record_drive
 from rbhyst.errors import InputError
+from rbhyst.model.inputs import deck_inputs
 
 #: Q of the drive's shock response spectrum in shock.json and srs.csv (ISO 18431-4's usual)
 DRIVE_Q = 10.0
@@ -53,6 +54,15 @@ class ShockRequest:
     acceleration_limit_g: dict
     force_capacity_N: float | dict | None
     deck_axes: dict
+    #: an SRS specification matched per axis (rbhyst.analyses.shock.synthesis): (Specification, q,
+    #: method, duration s, seed, Table or None)
+    srs: tuple | None = None
+    #: the files the shock reads beside the deck: (key, path, as given)
+    files: tuple = ()
+
+    @property
+    def vertical(self) -> str:
+        return next(a for a, what in self.deck_axes.items() if what == "vertical")
 
 
 def request(deck, cli: dict) -> ShockRequest:
@@ -111,6 +121,7 @@ def request(deck, cli: dict) -> ShockRequest:
     else:
         problems.append("shock: no shock: --pulse NAME (a named pulse), --record FILE --units U, or shock.pulse / "
                         "shock.record in the deck")
+    files = () if record is None else ((record[4], record[0], str(cli.get("record") or own.record.file)),)
     axes = cli["axes"] if "axes" in cli else given.get("axes") or list(deck_axes)
     problems += [f"{key['axes']}: {a!r}: an axis of the deck ({', '.join(deck_axes)})" for a in axes
                  if a not in deck_axes]
@@ -125,13 +136,19 @@ def request(deck, cli: dict) -> ShockRequest:
     if problems:
         raise InputError(problems)
     return ShockRequest(pulse, record, list(axes), int(shocks), limits["acceleration_limit_g"] or {},
-                        limits["force_capacity_N"], deck_axes)
+                        limits["force_capacity_N"], deck_axes, files=files)
 
 
 def output_files(req: ShockRequest) -> list[str]:
     """The files shock writes (but the plot), to refuse a folder before the work."""
-    return ["shock.json", DRIVE_FILE, "srs.csv"] + [f"run_{run_folder(label)}/summary.json"
-                                                   for label in run_labels(req)]
+    drives = ([drive_file(a) for a in req.axes] + [f"srs_{a}.csv" for a in req.axes] + ["srs_check.csv"]
+              if req.srs is not None else [DRIVE_FILE, "srs.csv"])
+    return ["shock.json", *drives] + [f"run_{run_folder(label)}/summary.json" for label in run_labels(req)]
+
+
+def drive_file(axis: str) -> str:
+    """An axis's own drive (an SRS matched per axis)."""
+    return f"drive_{axis}.csv"
 
 
 def run_labels(req: ShockRequest) -> list[str]:
@@ -153,25 +170,62 @@ def make_drive(deck, req: ShockRequest) -> tuple[Drive, float]:
     return record_drive(path, units, scale, dt, req.shocks, gap, where), gap
 
 
+def make_drives(deck, req: ShockRequest) -> tuple[dict[str, Drive], float, list]:
+    """Each shocked axis's drive, the rest after each shock, and the matched records (an SRS
+    specification: one of its own an axis, rbhyst.analyses.shock.synthesis; else [] and one drive
+    for every axis)."""
+    if req.srs is None:
+        drive, gap = make_drive(deck, req)
+        return {axis: drive for axis in req.axes}, gap, []
+    from rbhyst.analyses.shock.drive import repeated
+    from rbhyst.analyses.shock.synthesis import make_shocks
+
+    gap = free_vibration.tail_s(_lowest_frequencies(_deck_with_motion(deck, None, 1.0)))
+    spec, q, method, duration, seed, table = req.srs
+    made = make_shocks(spec, q, duration, method, seed, req.axes, table, vertical=req.vertical)
+    drives = {m.axis: repeated(m.acc_g * G, m.dt, req.shocks, gap,
+                               f"{spec.name} ({method}, Q = {q:g}, seed {seed}) for {m.axis}") for m in made}
+    return drives, gap, made
+
+
 def shock(deck, req: ShockRequest, folder: Path, integrator: str | None = None, dt: float | None = None,
-          tolerance: float | None = None, say=None) -> tuple[Verdict, Drive]:
-    """Make the drive, run the deck along each direction of each axis, judge every criterion;
-    write into ``folder`` (a staging folder): shock.json, drive.csv, srs.csv (the drive's one
-    shock) and run_<axis>_<direction>/summary.json (the plot is the caller's)."""
+          tolerance: float | None = None, say=None, command: str | None = None
+          ) -> tuple[Verdict, dict[str, Drive], list]:
+    """Make the drives, run the deck along each direction of each axis, judge every criterion;
+    write into ``folder`` (a staging folder): shock.json, drive.csv and srs.csv (the drive's one
+    shock; an SRS matched per axis: drive_<axis>.csv, srs_<axis>.csv and srs_check.csv) and
+    run_<axis>_<direction>/summary.json (the plots are the caller's). Returns the verdict, each
+    axis's drive and the matched records. ``command``: the command line shock.json's
+    ``provenance`` records (None: Python)."""
+    from rbhyst.files.provenance import provenance
     from rbhyst.results.writers import deck_as_run, write_srs_csv, write_summary
 
+    inputs = [i for i in deck_inputs(deck) if i[0] == "deck"] + list(req.files)
+    started = provenance(command, inputs)
+
     folder = Path(folder).resolve()  # the runs' decks name the drive's file from their own folder
-    drive, gap = make_drive(deck, req)
-    (folder / DRIVE_FILE).write_text(drive.text(f"# rbhyst shock {deck.source.name if deck.source else 'deck'}"),
-                                     encoding="utf-8")
-    srs = drive_srs(drive)
-    write_srs_csv(srs, folder / "srs.csv")
+    drives, gap, made = make_drives(deck, req)
+    mark = f"# rbhyst shock {deck.source.name if deck.source else 'deck'}"
+    files, facts = {}, {}
+    for axis, drive in drives.items():
+        name, srs_name = (drive_file(axis), f"srs_{axis}.csv") if made else (DRIVE_FILE, "srs.csv")
+        files[axis] = folder / name
+        if made or not facts:  # one drive every axis shares is written once
+            files[axis].write_text(drive.text(mark), encoding="utf-8")
+            srs = drive_srs(drive)
+            write_srs_csv(srs, folder / srs_name)
+            facts[axis] = drive_facts(drive, srs, gap, name, srs_name)
+    if made:
+        from rbhyst.analyses.shock.synthesis import check_rows
+
+        (folder / "srs_check.csv").write_text("\n".join(check_rows(made)) + "\n", encoding="utf-8")
     runs, afters, per_shock, notes = [], [], [], []
     labels = run_labels(req)
     for k, label in enumerate(labels, start=1):
         if say is not None:
             say(f"running {label} ({k} of {len(labels)})")
-        support = {label[:-1]: {"file": str(folder / DRIVE_FILE), "units": "g",
+        drive = drives[label[:-1]]
+        support = {label[:-1]: {"file": str(files[label[:-1]]), "units": "g",
                                 "scale": 1.0 if label.endswith("+") else -1.0}}
         result, s, after = _run_to_rest(deck, support, drive.end, gap, {"integrator": integrator, "dt": dt,
                                                                           "tolerance": tolerance})
@@ -186,7 +240,7 @@ def shock(deck, req: ShockRequest, folder: Path, integrator: str | None = None, 
     limits = SimpleNamespace(acceleration_limit_g=req.acceleration_limit_g, force_capacity_N=req.force_capacity_N,
                              axes=req.deck_axes, statistic="max")
     criteria = _criteria(deck, limits, runs)
-    shocks = [shock_peaks(result, drive, [c["column"] for c in criteria]) for result, _ in per_shock]
+    shocks = [shock_peaks(result, drives[label[:-1]], [c["column"] for c in criteria]) for result, label in per_shock]
     accuracy = _accuracy(runs, deck.analysis.warn_error)
     warnings = [f"{label}: {w}" for label, s in runs for w in s["warnings"]]
     passed = accuracy["pass"] and not warnings and all(c["pass"] for c in criteria)
@@ -195,7 +249,9 @@ def shock(deck, req: ShockRequest, folder: Path, integrator: str | None = None, 
         "rbhyst_version": _version(),
         "deck": deck.source.name if deck.source else None,
         "pass": passed,
-        "drive": drive_facts(drive, srs, gap),
+        "drive": (next(iter(facts.values())) if not made else
+                  {"per_axis": facts, "shocks_per_direction": req.shocks, "srs_check": "srs_check.csv",
+                   "within": all(bool(m.within.all()) for m in made)}),
         "axes": dict(req.deck_axes),
         "shocked_axes": req.axes,
         "runs_per_axis": "both directions: + as the drive is, - with its sign reversed",
@@ -220,9 +276,10 @@ def shock(deck, req: ShockRequest, folder: Path, integrator: str | None = None, 
                        "criteria are the run's peaks, which see every compute step: a shock's peak between two rows "
                        "is the criteria's, not its own), and the largest change of a later shock's from the first's",
         "deck_as_run": deck_as_run(deck, integrator=integrator, dt=dt, tolerance=tolerance),
+        "provenance": started,
     }
     (folder / "shock.json").write_text(json.dumps(data, indent=2) + "\n", encoding="utf-8")
-    return Verdict(data, criteria), drive
+    return Verdict(data, criteria), drives, made
 
 
 def _version() -> str:
@@ -240,11 +297,11 @@ def drive_srs(drive: Drive):
     return shock_spectrum(drive.one(), drive.dt, default_srs_frequencies(drive.dt), [1.0 / (2.0 * DRIVE_Q)])
 
 
-def drive_facts(drive: Drive, srs, gap: float) -> dict:
+def drive_facts(drive: Drive, srs, gap: float, file: str = DRIVE_FILE, srs_file: str = "srs.csv") -> dict:
     """shock.json's ``drive``: what it is, its timing, its pulse's band check, its SRS's peaks."""
     from rbhyst.model.shock_pulses import table_motion, tolerance_check
 
-    facts = {"source": drive.source, "file": DRIVE_FILE, "dt_s": drive.dt, "shocks_per_direction": drive.shocks,
+    facts = {"source": drive.source, "file": file, "dt_s": drive.dt, "shocks_per_direction": drive.shocks,
              "shock_s": drive.length, "rest_after_each_s": gap, "peak_g": float(np.abs(drive.one()).max() / G)}
     v, x = table_motion(drive.one(), drive.dt)
     facts["table"] = {"end_velocity_m_s": float(v[-1]), "end_displacement_m": float(x[-1]),
@@ -255,7 +312,7 @@ def drive_facts(drive: Drive, srs, gap: float) -> dict:
         facts["tolerance"] = tolerance_check(p, p.series.times, p.series.values)
     i, k = int(np.argmax(srs.maximax[:, 0])), int(np.argmax(srs.pv[:, 0]))
     f = srs.frequencies_hz
-    facts["srs"] = {"file": "srs.csv", "q": DRIVE_Q, "frequencies_hz": [float(f[0]), float(f[-1])],
+    facts["srs"] = {"file": srs_file, "q": DRIVE_Q, "frequencies_hz": [float(f[0]), float(f[-1])],
                     "maximax_g": float(srs.maximax[i, 0] / G), "at_hz": float(f[i]),
                     "pv_m_s": float(srs.pv[k, 0]), "pv_at_hz": float(f[k])}
     return facts
