@@ -227,7 +227,7 @@ def plot_srs_check(shocks, path: Path, band_db: tuple[float, float], title: str 
 
 @styled
 def plot_shock_records(shocks, path: Path, title: str = ""):
-    """Each record's acceleration (g), and the table's velocity (m/s) and displacement (m) from rest,
+    """Each record's acceleration (g), and the table's velocity (m/s) and displacement (mm) from rest,
     against time: where it starts and that it ends at rest (``shocks``:
     rbhyst.analyses.shock.synthesis.Shock; returns the figure, saved to ``path``)."""
     from rbhyst.model.baseline import integrate
@@ -236,9 +236,10 @@ def plot_shock_records(shocks, path: Path, title: str = ""):
     for j, s in enumerate(shocks):
         t = s.dt * np.arange(len(s.acc_g))
         v, d = integrate(s.acc_g * G_STANDARD, s.dt)
-        for ax, values in zip(axes, (s.acc_g, v, d)):
+        # a table's stroke is read in millimetres, not as 0.004 under a "1e-3"
+        for ax, values in zip(axes, (s.acc_g, v, d * 1e3)):
             ax.plot(t, values, color=f"C{j}", lw=0.8, label=s.axis)
-    for ax, label in zip(axes, ("acceleration [g]", "velocity [m/s]", "displacement [m]")):
+    for ax, label in zip(axes, ("acceleration [g]", "velocity [m/s]", "displacement [mm]")):
         ax.set_ylabel(label)
         ax.axhline(0.0, color="0.6", lw=0.6)
         ax.grid(True, alpha=0.25)
