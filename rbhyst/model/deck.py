@@ -276,10 +276,37 @@ def _stroke_value(v):
     raise ValueError(f"{v!r} must be {what}")
 
 
+class Stop(_Model):
+    """A stop beyond a gap (rbhyst.model.stop: Walton and Braun's linear loading and unloading):
+    ``gap`` symmetric (m), or [lower, upper] with lower < 0 < upper (the deformations where it is
+    met), ``stiffness`` K (N/m) and ``restitution`` e (0 < e <= 1)."""
+
+    gap: float | list[float]
+    stiffness: PosFloat
+    restitution: Annotated[float, Field(gt=0.0, le=1.0)]
+
+    @field_validator("gap", mode="before")
+    @classmethod
+    def _gap(cls, v):
+        return _stroke_value(v)
+
+    @property
+    def limits(self) -> tuple[float, float]:
+        """(lower, upper): the deformations where the stop is met."""
+        return (-self.gap, self.gap) if not isinstance(self.gap, list) else tuple(self.gap)
+
+    @property
+    def law(self) -> tuple[float, float, float, float]:
+        """(lower, upper, K, e): an Element's ``stop`` (rbhyst.model.system.Element)."""
+        return (*self.limits, float(self.stiffness), float(self.restitution))
+
+
 class Element(_Placed):
     hysteresis: str
     #: the deformation it can take (m): symmetric, or [lower, upper] with lower < 0 < upper
     stroke: float | list[float] | None = None
+    #: a stop beyond a gap: the mount bottoms out on it (rbhyst.model.stop)
+    stop: Stop | None = None
 
     @field_validator("stroke", mode="before")
     @classmethod
@@ -330,6 +357,15 @@ class IsolatorStrokes(_ByDirection):
         return _stroke_value(v)
 
 
+class IsolatorStops(_ByDirection):
+    """The stop of each of an isolator's directions, as an element's (any may be left out)."""
+
+    axial: Stop | None = None
+    shear: Stop | None = None
+    shear1: Stop | None = None
+    shear2: Stop | None = None
+
+
 def _lines(v, what: str):
     """Shear lines as a deck gives them: lists of numbers, one line alone as it is (how many lines
     and components is checked with the deck's dimension, in rbhyst.model.isolators)."""
@@ -357,6 +393,8 @@ class Isolator(_Model):
     hysteresis: IsolatorSets
     count: Annotated[int, Field(ge=1)] = 1
     stroke: IsolatorStrokes | None = None
+    #: a stop beyond a gap for each direction (any may be left out)
+    stop: IsolatorStops | None = None
     #: "mss": the two shear lines are one multiple shear spring (rbhyst.model.mss), in space
     coupling: Literal["none", "mss"] = "none"
     #: the MSS's springs (even, at least 4; rbhyst.model.mss.DEFAULT_SPRINGS without)
@@ -383,6 +421,14 @@ class Isolator(_Model):
         if v is not None and not isinstance(v, dict):
             raise ValueError(f"{v!r}: an isolator takes a stroke for each direction: "
                              "{ axial = 0.03, shear = [-0.05, 0.05] } (any may be left out)")
+        return v
+
+    @field_validator("stop", mode="before")
+    @classmethod
+    def _stops(cls, v):
+        if v is not None and not (isinstance(v, dict) and set(v) <= {"axial", "shear", "shear1", "shear2"}):
+            raise ValueError(f"{v!r}: an isolator takes a stop for each direction: {{ axial = {{ gap = 0.02, "
+                             "stiffness = 1e6, restitution = 0.5 } } (axial, shear, shear1, shear2; any may be left out)")
         return v
 
     @model_validator(mode="after")
@@ -909,6 +955,9 @@ KEY_UNITS: dict[tuple[str, ...], str] = {
     **{(group, name): unit for group in ("elements", "dampers") for name, unit in (
         ("angle_deg", "°"), ("point", "m"), ("count", ""), ("vertex", ""), ("part", ""), ("direction", ""))},
     ("elements", "stroke"): "m", ("dampers", "c"): "N s/m",
+    ("elements", "stop", "gap"): "m", ("elements", "stop", "stiffness"): "N/m", ("elements", "stop", "restitution"): "",
+    **{("isolators", "stop", name, key): unit for name in ("axial", "shear", "shear1", "shear2")
+       for key, unit in (("gap", "m"), ("stiffness", "N/m"), ("restitution", ""))},
     **{("isolators", name): unit for name, unit in (
         ("axial_deg", "°"), ("shear_deg", "°"), ("point", "m"), ("count", ""), ("vertex", ""), ("part", ""),
         ("axial", ""), ("shear", ""), ("coupling", ""), ("springs", ""), ("reference", "m"))},

@@ -285,7 +285,7 @@ class FixedStepPlan(Plan):
             self.coef[int(nsub)] = method.coefficients(mass, k0, self.cm[:system.n], steps)  # (one set a level)
             self.level0[int(nsub)] = level0
         self.bvec = np.ascontiguousarray(system.bvec)
-        self.params = np.ascontiguousarray(system.params)
+        self.params = system.kernel_params  # (with each stop's row where there are stops)
         self.axial = system.kernel_axial
         # the monitor's trace bound, b_e^T M^-1 b_e: with exact kinematics the rotation's entry of
         # b_e(q) turns between +-sqrt(b3^2 + axial^2), its largest taken
@@ -330,7 +330,7 @@ class FixedStepPlan(Plan):
         # whatever its direction; until it moves, an element's tangent is the stiffer of its two
         # first moves, so the monitor sees a stiff body at rest before the first step that moves it
         for e in range(ne):
-            st[0, e, kernels.K] = stiffnesses_at_zero(self.params[e])[2]
+            st[0, e, kernels.K] = stiffnesses_at_zero(self.system.params[e])[2]
         static = self.system.static
         q0 = static.q if static is not None else np.zeros(n)
         p0 = loads_at(self.system.excitation.load(np.zeros(1), self.system.mass), q0[None], n,
@@ -392,7 +392,7 @@ class FixedStepPlan(Plan):
         """The row at t = 0 of the state initial_state gives."""
         n = self.system.n
         return Raw(t=np.zeros(1), d=x[None, x_slice(n, 0)].copy(), v=np.zeros((1, n)),
-                   u=st[None, 0, :, kernels.U].copy(), f=st[None, 0, :, kernels.F].copy(),
+                   u=st[None, 0, :, kernels.U].copy(), f=element_forces(st[0])[None],
                    e=np.zeros((1, kernels.N_E)))
 
     def chunks(self, x: np.ndarray, st: np.ndarray, fine: bool = False, into=None):
@@ -516,7 +516,8 @@ class FixedStepPlan(Plan):
         )
         return Result(system=system, settings=s, columns=self.layout.names, table=table, extremes=rows.extremes,
                       plot=rows.plot, stats=stats, layout=self.layout, csv_path=rows.csv_path, compared=rows.compared,
-                      compare_every=rows.compare_every, spectra=run_spectra(system, s, rows.body_spectra()))
+                      compare_every=rows.compare_every, spectra=run_spectra(system, s, rows.body_spectra()),
+                      stops=stop_record(st[int(x[X_CUR])]) if system.has_stops else None)
 
 
 class _Buffers:
@@ -540,6 +541,23 @@ def run_spectra(system: System, s: Settings, body):
 
     n_steps = output_steps(system, s)
     return ground_spectra(system.excitation, n_steps * s.dt, *s.spectra).joined(body)
+
+
+def element_forces(st: np.ndarray) -> np.ndarray:
+    """(rows,) each kernel row's force in the element states st (rows, N_STATE): its VRM's and its
+    stop's (the VRM's alone, to the bit, where the stop bears nothing)."""
+    f = st[:, kernels.F].copy()
+    fs = st[:, kernels.FS]
+    bears = fs != 0.0
+    f[bears] += fs[bears]
+    return f
+
+
+def stop_record(st: np.ndarray) -> np.ndarray:
+    """(rows, 4) each kernel row's stop at the end of a run from its final states st (rows,
+    N_STATE): contacts begun, energy its impacts lost (J, one element), largest force (N) and
+    penetration (m); a contact still on counts its loss so far."""
+    return np.ascontiguousarray(st[:, [kernels.NI, kernels.IMP, kernels.PF, kernels.PD]], dtype=float)
 
 
 def _chunk_rows(ne: int, n: int, n_cols: int, nsub: int) -> int:

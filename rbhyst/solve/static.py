@@ -42,7 +42,7 @@ def static_equilibrium(system) -> Static:
     update = kernel("static_update")  # (built at install: a run under gravity loads no numba)
     w = np.asarray(system.weight, dtype=float)
     bvec = np.ascontiguousarray(system.bvec, dtype=float)
-    params = np.ascontiguousarray(system.params, dtype=float)
+    params = system.kernel_params  # (stops bear the weight too: a body resting on its contacts)
     mult = np.ascontiguousarray(system.mult, dtype=float)
     ne, n = bvec.shape
     axial = np.ascontiguousarray(system.kernel_axial, dtype=float)
@@ -51,7 +51,7 @@ def static_equilibrium(system) -> Static:
     bq = bvec.copy()  # the rows at q (exact kinematics)
     st = np.zeros((2, ne, kernels.N_STATE))
     for e in range(ne):
-        st[0, e, kernels.K] = max(virgin_tangent(params[e], 1.0), virgin_tangent(params[e], -1.0))
+        st[0, e, kernels.K] = max(virgin_tangent(params[e, :2], 1.0), virgin_tangent(params[e, :2], -1.0))
     kpeak = np.zeros((ne, 2))
     cur = 0
     q = np.zeros(n)
