@@ -8,6 +8,7 @@ seed and in the CSV columns).
 
 
 import functools
+import math
 import re
 import tomllib
 from pathlib import Path
@@ -436,6 +437,58 @@ class Isolator(_Model):
         return _one_place(self)
 
 
+#: the hysteresis set of a contact's element: no VRM force of its own (kb = f0 = 0; alpha 1, any
+#: positive value, so that its branches are well defined), its stop bears it
+CONTACT_SET = "(contact)"
+
+
+class Contact(_Model):
+    """A point of the body resting on the ground along ``normal`` (from the ground towards the
+    body): compression only, never tension, a stop of ``stiffness`` and ``restitution`` met
+    once the point has moved ``gap`` (m, 0: touching at rest) against the normal
+    (rbhyst.model.stop). Frictionless."""
+
+    part: Annotated[int, Field(ge=1)] | None = None
+    vertex: Annotated[int, Field(ge=1)] | None = None
+    point: Point | None = None
+    normal: Annotated[list[float], Field(min_length=2, max_length=3)]
+    stiffness: PosFloat
+    restitution: Annotated[float, Field(gt=0.0, le=1.0)]
+    gap: Annotated[float, Field(ge=0.0)] = 0.0
+    count: Annotated[int, Field(ge=1)] = 1
+
+    @model_validator(mode="before")
+    @classmethod
+    def _frictionless(cls, v):
+        if isinstance(v, dict) and "friction" in v:
+            raise _key_problems([("friction", "contacts are frictionless (a contact bears along its normal only); "
+                                              "give the tangential restraint as [[elements]] or [[isolators]]")])
+        return v
+
+    @field_validator("normal")
+    @classmethod
+    def _normal(cls, v):
+        if not all(np.isfinite(x) for x in v) or not any(x != 0.0 for x in v):
+            raise ValueError(f"{v!r} must be a direction: numbers, not all zero")
+        return v
+
+    @model_validator(mode="after")
+    def _one_place(self):
+        return _one_place(self)
+
+    def element(self, dimensions: int) -> "Element":
+        """The element it is: along its normal, no VRM force (CONTACT_SET), a stop on the
+        compression side at -gap and none on the other."""
+        place = {k: getattr(self, k) for k in ("part", "vertex", "point") if getattr(self, k) is not None}
+        if dimensions == 3:
+            line = {"direction": [float(x) for x in self.normal]}
+        else:
+            line = {"angle_deg": math.degrees(math.atan2(self.normal[1], self.normal[0]))}
+        stop = Stop.model_construct(gap=[-self.gap, math.inf], stiffness=self.stiffness, restitution=self.restitution)
+        return Element.model_construct(**place, **line, hysteresis=CONTACT_SET, count=self.count, stroke=None,
+                                       stop=stop)
+
+
 class Damper(_Placed):
     """A linear viscous damper: force c times its rate of deformation along angle_deg (eqs. 5-8);
     c = 0 keeps its place and columns with no force (a sweep's no-damper baseline)."""
@@ -846,6 +899,9 @@ class Deck(_Model):
     #: mounts of an axial and shear behaviour, each expanded into uniaxial elements after the
     #: [[elements]] (rbhyst.model.isolators)
     isolators: Annotated[list[Isolator], Field(min_length=1)] | None = None
+    #: points resting on the ground, compression only (rbhyst.model.stop), expanded into elements
+    #: after the isolators'
+    contacts: Annotated[list[Contact], Field(min_length=1)] | None = None
     dampers: list[Damper] | None = None
     damping: Damping | None = None
     excitation: Excitation | None = None
@@ -866,7 +922,7 @@ class Deck(_Model):
     @property
     def supports(self) -> bool:
         """Whether the deck has elements: [[elements]], [[isolators]] or both."""
-        return self.elements is not None or self.isolators is not None
+        return self.elements is not None or self.isolators is not None or self.contacts is not None
 
     @property
     def element_entries(self) -> tuple[tuple[Element, "Origin"], ...]:
@@ -882,6 +938,9 @@ class Deck(_Model):
             n = self.body.dimensions
             for k, iso in enumerate(self.isolators, start=1):
                 out += [(el, Origin(k, role)) for el, role in expand(iso, n, Element)]
+        if self.contacts and self.body is not None:
+            n = self.body.dimensions
+            out += [(c.element(n), Origin(k, "contact")) for k, c in enumerate(self.contacts, start=1)]
         return tuple(out)
 
     @property
@@ -962,6 +1021,9 @@ KEY_UNITS: dict[tuple[str, ...], str] = {
         ("axial_deg", "°"), ("shear_deg", "°"), ("point", "m"), ("count", ""), ("vertex", ""), ("part", ""),
         ("axial", ""), ("shear", ""), ("coupling", ""), ("springs", ""), ("reference", "m"))},
     **{("isolators", "stroke", name): "m" for name in ("axial", "shear", "shear1", "shear2")},
+    **{("contacts", name): unit for name, unit in (
+        ("point", "m"), ("vertex", ""), ("part", ""), ("normal", ""), ("stiffness", "N/m"), ("restitution", ""),
+        ("gap", "m"), ("count", ""))},
     **{(*group, "*", name): unit for group in (("excitation", "support"), ("excitation", "force"))
        for name, unit in (("amplitude", "signal"), ("scale", ""), ("frequency_hz", "Hz"), ("phase_deg", "°"),
                           ("start", "s"), ("duration", "s"), ("dt", "s"), ("cycles", ""), ("ramp_cycles", ""),
@@ -1055,9 +1117,10 @@ def cross_references(deck: Deck) -> list[str]:
                                 f"defined: {', '.join(sorted(deck.hysteresis))}")
         if iso.vertex is not None and deck.body is not None:
             problems += [f"isolators[{k}].{p}" for p in vertex_reference_problems(deck.body, iso.part, iso.vertex)]
-    for k, dp in enumerate(deck.dampers or [], start=1):
-        if dp.vertex is not None and deck.body is not None:
-            problems += [f"dampers[{k}].{p}" for p in vertex_reference_problems(deck.body, dp.part, dp.vertex)]
+    for section in ("dampers", "contacts"):
+        for k, dp in enumerate(getattr(deck, section) or [], start=1):
+            if dp.vertex is not None and deck.body is not None:
+                problems += [f"{section}[{k}].{p}" for p in vertex_reference_problems(deck.body, dp.part, dp.vertex)]
     return problems
 
 
@@ -1117,6 +1180,9 @@ def dimension_problems(deck: Deck) -> list[str]:
                                     "action as angle_deg from x1")
                 elif el.angle_deg is None:
                     problems.append(f"{section}[{k}].angle_deg: required key is missing")
+    for k, c in enumerate(deck.contacts or [], start=1):
+        problems += _dimension_of(f"contacts[{k}].point", c.point, n)
+        problems += _dimension_of(f"contacts[{k}].normal", c.normal, n)
     from rbhyst.model.isolators import isolator_problems
 
     for k, iso in enumerate(deck.isolators or [], start=1):

@@ -34,11 +34,13 @@ class Origin:
 
     @property
     def isolator(self) -> int | None:
-        return self.index if self.role is not None else None
+        return self.index if self.role not in (None, "contact") else None
 
     @property
     def label(self) -> str:
-        """'elements[3]' or 'isolators[2] shear1', as a user finds it in the deck."""
+        """'elements[3]', 'isolators[2] shear1' or 'contacts[1]', as a user finds it in the deck."""
+        if self.role == "contact":
+            return f"contacts[{self.index}]"
         return f"elements[{self.index}]" if self.role is None else f"isolators[{self.index}] {self.role}"
 
 

@@ -868,7 +868,13 @@ def _set_stiffnesses(deck: dk.Deck) -> tuple[dict, dict, dict]:
     sets = {name: hs.array() for name, hs in deck.hysteresis.items()}
     sets.update(_mss_sets(deck, sets))
     k_rev, k_el = {}, {}
+    if deck.contacts:
+        # a contact's element has no force of its own: its stop bears it (dk.Contact.element)
+        sets[dk.CONTACT_SET] = np.array([[0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0]] * 2)
+        k_rev[dk.CONTACT_SET] = k_el[dk.CONTACT_SET] = 0.0
     for name, p in sets.items():
+        if name == dk.CONTACT_SET:
+            continue
         k, k_el[name], _ = stiffnesses_at_zero(p)
         if not k > 0.0:
             raise InputError(f"hysteresis.{name}: the stiffness at a reversal at u = 0 is {k:.6g} N/m; it must be > 0")

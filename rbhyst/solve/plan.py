@@ -24,6 +24,7 @@ from rbhyst.model.kinematics import loads_at
 from rbhyst.model.system import System
 from rbhyst.solve.result import Result, RunStats
 from rbhyst.solve.static import at_rest_under_gravity
+from rbhyst.solve.stops import element_forces, stop_record
 from rbhyst.model.settings import Settings, settings_from_deck  # noqa: F401  (re-exported: the run's inputs)
 
 #: bytes of rows a chunk may hold (raw state and table): bounds a run's memory
@@ -338,6 +339,8 @@ class FixedStepPlan(Plan):
         if static is not None:  # at rest at the static equilibrium under gravity, its branches as the path left them
             st[0] = static.st
             st[0, :, kernels.UP] = st[0, :, kernels.U]  # (no step before the first)
+            # the stops' record is the run's: a contact the weight rests on has not struck
+            st[0, :, [kernels.IMP, kernels.NI, kernels.PF, kernels.PD]] = 0.0
             x[x_slice(n, 0)] = static.q
             p0 = p0 - static.r
         x[x_slice(n, 2)] = self.minv * p0  # equilibrium at t = 0: records rarely start at zero
@@ -541,23 +544,6 @@ def run_spectra(system: System, s: Settings, body):
 
     n_steps = output_steps(system, s)
     return ground_spectra(system.excitation, n_steps * s.dt, *s.spectra).joined(body)
-
-
-def element_forces(st: np.ndarray) -> np.ndarray:
-    """(rows,) each kernel row's force in the element states st (rows, N_STATE): its VRM's and its
-    stop's (the VRM's alone, to the bit, where the stop bears nothing)."""
-    f = st[:, kernels.F].copy()
-    fs = st[:, kernels.FS]
-    bears = fs != 0.0
-    f[bears] += fs[bears]
-    return f
-
-
-def stop_record(st: np.ndarray) -> np.ndarray:
-    """(rows, 4) each kernel row's stop at the end of a run from its final states st (rows,
-    N_STATE): contacts begun, energy its impacts lost (J, one element), largest force (N) and
-    penetration (m); a contact still on counts its loss so far."""
-    return np.ascontiguousarray(st[:, [kernels.NI, kernels.IMP, kernels.PF, kernels.PD]], dtype=float)
 
 
 def _chunk_rows(ne: int, n: int, n_cols: int, nsub: int) -> int:

@@ -257,7 +257,9 @@ class Result:
         """An element's stop: its law and, for each of its ``count`` elements alike, the contacts
         begun, the largest contact force and penetration, the energy its impacts lost."""
         lo, hi, k, r = el.stop
-        out = {"gap_m": [lo, hi], "stiffness_N_m": k, "restitution": r,
+        # (a contact's stop has one side: the other is null, JSON having no infinity)
+        out = {"gap_m": [lo + 0.0 if np.isfinite(lo) else None, hi if np.isfinite(hi) else None],
+               "stiffness_N_m": k, "restitution": r,
                "law": "Walton-Braun: loading K d, unloading K/e^2 from the peak"}
         if self.stops is not None:
             n, lost, force, depth = (float(v) for v in self.stops[el.row])
@@ -266,8 +268,10 @@ class Result:
 
     def _static_summary(self) -> dict:
         st = self.system.static
+        from rbhyst.solve.stops import element_forces
+
         u = self.system.expand(st.st[None, :, 0])[0]
-        f = self.system.expand(st.st[None, :, 1])[0]
+        f = self.system.expand(element_forces(st.st)[None] + 0.0)[0]
         q = self.system.to_deck(st.q) if hasattr(self.system, "to_deck") else st.q
         return {**{c.column("d"): float(x) for c, x in zip(self.system.coordinates, q)},
                 "elements": [{"u_m": float(a), "f_N": float(b)} for a, b in zip(u, f)],

@@ -273,7 +273,7 @@ def integrate(system, t_out: np.ndarray, rtol: float = RTOL, pieces=None, max_st
     minv = tuple(1.0 / system.mass)
     args = (minv, np.ascontiguousarray(system.bvec), system.kernel_axial, system.rotation_index, system.mult, system.kernel_params,
             np.ascontiguousarray(system.kernel_damping))
-    work = (np.zeros((12, ne)), np.zeros((7, width)), np.zeros((16, width)), np.zeros((7, width)), np.zeros((4, max(system.excitation.width, ne))),
+    work = (np.zeros((13, ne)), np.zeros((7, width)), np.zeros((16, width)), np.zeros((7, width)), np.zeros((4, max(system.excitation.width, ne))),
             np.zeros(NS + 1))
     tail = (rtol, atol, init, y0, 1e-6, int(max_steps), _A, _B, _C, _E3, _E5, _D, out_y, out_eu, out_ef, out_eh, info, *work)
     _integrate = kernel("integrate", n)
@@ -317,19 +317,21 @@ def integrate(system, t_out: np.ndarray, rtol: float = RTOL, pieces=None, max_st
         "largest_step_s": float(info[R_HMAX]),
         "wall_s": wall,
     }
-    ms = work[0][6:12]  # the stops' (kernels.dop853._stops_at): as plan.stop_record's columns
-    stops = np.ascontiguousarray(np.column_stack([ms[3], ms[2] + _open_loss(system, ms), ms[4], ms[5]]))
+    ms = work[0][6:13]  # the stops' (kernels.dop853._stops_at): as plan.stop_record's columns, the
+    # loss counted from the start (a contact the weight rests on has lost what its loading did)
+    lost = ms[2] + _open_loss(system, ms[0], ms[1]) - _open_loss(system, init[4], init[5])
+    stops = np.ascontiguousarray(np.column_stack([ms[3], lost, ms[4], ms[5]]))
     return Solution(t_out, out_y, out_eu, out_ef, out_eh, stats, stops if system.has_stops else None)
 
 
-def _open_loss(system, ms: np.ndarray) -> np.ndarray:
-    """(rows,) what each row's contact still on at the end has lost (0.5 K (1 - e^2) d_max^2)."""
+def _open_loss(system, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
+    """(rows,) what each row's contact on at peaks lower, upper has lost (0.5 K (1 - e^2) d_max^2)."""
     from rbhyst.model.stop import STOP_E, STOP_K, STOP_ROW
 
     if not system.has_stops:
-        return np.zeros(ms.shape[1])
+        return np.zeros(len(lower))
     p = system.kernel_params[:, STOP_ROW]
-    return 0.5 * p[:, STOP_K] * (1.0 - p[:, STOP_E] ** 2) * np.maximum(ms[0], ms[1]) ** 2
+    return 0.5 * p[:, STOP_K] * (1.0 - p[:, STOP_E] ** 2) * np.maximum(lower, upper) ** 2
 
 
 def solve_with_stats(system, settings, rtol: float = RTOL, t_out: np.ndarray | None = None,

@@ -334,7 +334,7 @@ def _g_dense(F, y_old, x, bvec, axial, rot, e, s, n):
 @njit(cache=True, error_model="numpy", _nrt=False)
 def _integrate(minv, bvec, axial, rot, mult, params, cm, brk, pcoef, sig, t_out, rtol, atol, init, y0, h_first, max_steps,
                A, B, C, E3, E5, D, out_y, out_eu, out_ef, out_eh, info, el, vec, K, F, p, gs):
-    """The whole integration; el (12, ne), vec (7, ny), K (16, ny), F (7, ny), p (4, max(n, ne)), gs (NS + 1,)
+    """The whole integration; el (13, ne), vec (7, ny), K (16, ny), F (7, ny), p (4, max(n, ne)), gs (NS + 1,)
     are its work space (allocated by the caller: no reference counting in here), y0 (n,) the start.
 
     One function, long, because numba keeps the stepper's state in registers only within a function.
@@ -352,7 +352,7 @@ def _integrate(minv, bvec, axial, rot, mult, params, cm, brk, pcoef, sig, t_out,
     gp = el[2]
     ap = el[3]  # C_s(u_P): antiderivative at the branch start
     wacc = el[4]  # work of the element up to its branch start
-    ms = el[6:12]  # the stops' (_stops_at), from init's rows 4 and 5 (their held peaks)
+    ms = el[6:13]  # the stops' (_stops_at), from init's rows 4 and 5 (their held peaks); 6: their work at the start
     for e in range(ne):
         # init rows: branch sign, its start u_P, the gap there, the antiderivative there
         s[e] = init[0, e]
@@ -372,6 +372,9 @@ def _integrate(minv, bvec, axial, rot, mult, params, cm, brk, pcoef, sig, t_out,
     y = vec[0]
     for i in range(n):
         y[i] = y0[i]
+    if params.shape[1] > STOP_ROW:  # the stops' work is counted from the start, as the elements'
+        for e in range(ne):
+            _, ms[6, e] = stop_force(params, e, _u_el(bvec, axial, rot, e, y, n), ms[0, e], ms[1, e])
     y_new = vec[1]
     y_ev = vec[2]
     ytmp = vec[3]
@@ -711,7 +714,7 @@ def _write(io, y, bvec, axial, rot, mult, params, s, up, gp, ap, wacc, ms, out_y
             fs, ws = stop_force(params, e, u, ms[0, e], ms[1, e])
             if fs != 0.0:
                 fe += fs
-            w += ms[2, e] + ws
+            w += ms[2, e] + ws - ms[6, e]
         out_eu[io, e] = u
         out_ef[io, e] = fe
         eh += mult[e] * w

@@ -163,8 +163,10 @@ def start_spatial(bvec, axial, mult, st, cur, q, r, bq):
 def update_elements(bvec, axial, rot, mult, params, q0, q, st, cur, kpeak, r, bq, n):
     """Elements at the new configuration q (n,) (eqs. 5-11): u_e = b_e . q, R = sum mult b f.
 
-    st: (2, ne, 6) element states; st[cur] holds the state at the start of the step
-    (columns U, F, S, G, K, A, see hysteresis.vrm_update), st[1 - cur] receives the new
+    st: (2, ne, layout.N_STATE) element states; st[cur] holds the state at the start of the step
+    (columns U, F, S, G, K, A, see hysteresis.vrm_update; where params has a third row, each
+    element's stop, rbhyst.model.stop: its columns DL .. PD, its force added to the element's
+    and its tangents to kpeak, stop_step), st[1 - cur] receives the new
     state (two buffers used in turn: an accepted step copies nothing); kpeak (ne, 2) receives
     the largest tangent over the step and the tangent at its end; r (n,) the restoring force.
     n = bvec.shape[1], given by the caller: inlined into a kernel where it is a compile-time
@@ -178,6 +180,8 @@ def update_elements(bvec, axial, rot, mult, params, q0, q, st, cur, kpeak, r, bq
     stiffness returned (Newmark's Newton matrix goes without it in space: its iterations
     converge to the same tolerance); rot = SMALL: the seed's rows, bq untouched.
     Returns (ok, bad element, work of all element forces over the step, geometric stiffness).
+    Long, because it is inlined into every method's step: one loop over the elements, whose
+    state numba keeps in registers only within a function.
     """
     if rot == SPATIAL:  # one call, compiled once: the plane's kernels carry none of it inlined
         ok, bad, work = update_spatial(bvec, axial, mult, params, q0, q, st, cur, kpeak, r, bq)

@@ -51,7 +51,8 @@ def run_chunk(method, coef, mass, minv, cm, damped, bvec, axial, rot, mult, para
     kinematics, bq (ne, n) work space for the rows b_e(q) (rbhyst.solve.kernels.elements.update_elements).
     load: (n_steps * nsub_c + 1, n) generalized load on the compute grid from the chunk's
     start time t0. Row k of out_* receives the state after output step k + 1. out_e columns:
-    input energy, kinetic energy, hysteretic work, viscous work (cumulative).
+    input energy, kinetic energy, hysteretic work (the elements' forces', their stops' with them), viscous
+    work (cumulative).
     w (layout.N_W, n) and wm (n, n): work space.
     Every compute step is split into at least 2**min_level substeps (a structure-dependent
     method needs omega_0 h within the limit too, see simulate.min_level). A step whose Newton

@@ -76,7 +76,7 @@ def _drive(params, e, uu, f, s, g, k, a, ml, mu, u, f_out, stop):
 
 @njit(cache=True, error_model="numpy", _nrt=False)
 def redrive(params, st0, u, f_out):
-    """Drive element row e of ``params`` (ne, 2, 8) from its state st0[e] through the samples
+    """Drive element row e of ``params`` (ne, 2 or 3, 8: rbhyst.model.stop) from its state st0[e] through the samples
     u[:, e] (equally spaced in time), a reversal's vertex inserted between the samples it falls
     between; f_out[i, e] the force at sample i (f_out[0] is st0's). Returns -1, or the sample at
     which an element left its calibrated range."""
