@@ -161,3 +161,14 @@ def test_a_bad_stop_is_one_line_naming_its_key(tmp_path, stop, key, words):
     lines = [ln for ln in err.splitlines() if key in ln]
     assert lines and words in lines[0], err
     assert "Traceback" not in err
+
+
+def test_the_console_names_the_stops_struck_and_those_never_reached():
+    from rbhyst.report.console import stop_lines
+
+    d = launched("newmark", 1e-4)
+    d["elements"][2]["stop"] = {"gap": 0.5, "stiffness": 1e6, "restitution": 0.5}
+    lines = stop_lines(run(d).summary())
+    assert len(lines) == 2
+    assert lines[0].startswith("stops struck: e1: 1 impact, peak ") and "; e2: 1 impact" in lines[0]
+    assert lines[1] == "stops never reached: e3"
