@@ -172,3 +172,21 @@ def test_the_console_names_the_stops_struck_and_those_never_reached():
     assert len(lines) == 2
     assert lines[0].startswith("stops struck: e1: 1 impact, peak ") and "; e2: 1 impact" in lines[0]
     assert lines[1] == "stops never reached: e3"
+
+
+def test_the_shipboard_sample_strikes_its_snubbers_and_runs_clean():
+    """decks/shipboard_cabinet_shock.toml: MSS isolators whose axial directions bottom out on
+    snubbers; its shock drives them in, and the impacts raise the peak acceleration at G well above
+    that of the same cabinet with its snubbers out of reach."""
+    from conftest import DECKS
+    from rbhyst.model.deck import load_deck
+
+    deck = load_deck(DECKS / "shipboard_cabinet_shock.toml")
+    r = api.run(deck)
+    assert r.warnings == []
+    axial = [e for e in r.summary()["elements"] if e.get("role") == "axial"]
+    assert len(axial) == 4 and all(e["stop"]["impacts"] >= 1 for e in axial)
+    clear = deck.with_values({f"isolators[{k}].stop.axial.gap": 0.05 for k in range(1, 5)})
+    free = api.run(clear, estimate=False)
+    assert free.summary()["elements"][0]["stop"]["impacts"] == 0
+    assert free.extremes.peak("at3_m_s2") < 0.7 * r.extremes.peak("at3_m_s2")

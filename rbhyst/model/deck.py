@@ -282,8 +282,11 @@ class Stop(_Model):
     ``gap`` symmetric (m), or [lower, upper] with lower < 0 < upper (the deformations where it is
     met), ``stiffness`` K (N/m) and ``restitution`` e (0 < e <= 1)."""
 
+    #: where the stop is met: symmetric, or [lower, upper] with lower < 0 < upper (the element's deformation)
     gap: float | list[float]
+    #: K: the loading stiffness (unloading K / restitution^2)
     stiffness: PosFloat
+    #: e: the coefficient of restitution of an impact on it (0 < e <= 1)
     restitution: Annotated[float, Field(gt=0.0, le=1.0)]
 
     @field_validator("gap", mode="before")
@@ -451,10 +454,15 @@ class Contact(_Model):
     part: Annotated[int, Field(ge=1)] | None = None
     vertex: Annotated[int, Field(ge=1)] | None = None
     point: Point | None = None
+    #: from the ground towards the body, any length but zero
     normal: Annotated[list[float], Field(min_length=2, max_length=3)]
+    #: K: the contact's loading stiffness (unloading K / restitution^2)
     stiffness: PosFloat
+    #: e: the coefficient of restitution of a landing (0 < e <= 1)
     restitution: Annotated[float, Field(gt=0.0, le=1.0)]
+    #: how far above the ground the point is at rest (0: touching)
     gap: Annotated[float, Field(ge=0.0)] = 0.0
+    #: identical contacts at the point
     count: Annotated[int, Field(ge=1)] = 1
 
     @model_validator(mode="before")
