@@ -17,16 +17,15 @@ loses 0.5 K d_max^2 (1 - e^2). The work done on the stop so far is the energy it
 0.5 (K / e^2) (d - d_max (1 - e^2))^2 on the unloading line, plus what its impacts lost.
 
 One state per side: d_max of its current contact (0 outside one). The stop's parameters are the
-kernels' third parameter row of an element (``STOP_*`` below; rbhyst.model.system.System.kernel_params).
+kernels' third parameter row of an element (rbhyst.model.hysteresis ``STOP_*``;
+rbhyst.model.system.System.kernel_params).
 """
 
 from __future__ import annotations
 
 from numba import njit
 
-# the third row of an element's kernel parameters (rows 0 and 1 are its VRM branches)
-STOP_ROW = 2
-STOP_LOWER, STOP_UPPER, STOP_K, STOP_E = 0, 1, 2, 3  # gaps (m, lower < 0 < upper; +-inf: none), N/m, ratio
+from rbhyst.model.hysteresis import STOP_E, STOP_K, STOP_LOWER, STOP_ROW, STOP_UPPER  # noqa: F401 (the kernels')
 
 
 @njit(cache=True, error_model="numpy", inline="always")

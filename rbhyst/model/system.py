@@ -502,7 +502,7 @@ class System:
         row each (rbhyst.model.stop.STOP_ROW: lower and upper gap, K, e; +-inf, 0, 1 without)."""
         if not self.has_stops:
             return np.ascontiguousarray(self.params, dtype=float)
-        from rbhyst.model.stop import STOP_E, STOP_K, STOP_LOWER, STOP_UPPER
+        from rbhyst.model.hysteresis import STOP_E, STOP_K, STOP_LOWER, STOP_UPPER
 
         out = np.zeros((len(self.params), 3, self.params.shape[2]))
         out[:, :2] = self.params

@@ -96,7 +96,7 @@ def touching(params: np.ndarray, st: np.ndarray) -> np.ndarray:
     """(rows,) the loading stiffness K of each stop met exactly at its gap, bearing nothing yet (a
     contact touching the ground at rest): Newton's matrix takes it, as the stop takes it from
     there on (rbhyst.model.stop); 0 elsewhere."""
-    from rbhyst.model.stop import STOP_K, STOP_LOWER, STOP_ROW, STOP_UPPER
+    from rbhyst.model.hysteresis import STOP_K, STOP_LOWER, STOP_ROW, STOP_UPPER
 
     if params.shape[1] <= STOP_ROW:
         return np.zeros(len(st))

@@ -326,7 +326,7 @@ def integrate(system, t_out: np.ndarray, rtol: float = RTOL, pieces=None, max_st
 
 def _open_loss(system, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
     """(rows,) what each row's contact on at peaks lower, upper has lost (0.5 K (1 - e^2) d_max^2)."""
-    from rbhyst.model.stop import STOP_E, STOP_K, STOP_ROW
+    from rbhyst.model.hysteresis import STOP_E, STOP_K, STOP_ROW
 
     if not system.has_stops:
         return np.zeros(len(lower))
