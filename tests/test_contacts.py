@@ -4,12 +4,10 @@ restitution says in closed form, a rigid block starts to rock at g b / h, and no
 
 from __future__ import annotations
 
-import copy
-
 import numpy as np
 import pytest
-
 from conftest import invoke, linear_set, write_deck
+
 from rbhyst import api
 from rbhyst.model.deck import parse_deck
 

@@ -8,8 +8,8 @@ import copy
 
 import numpy as np
 import pytest
-
 from conftest import invoke, square_linear_deck, write_deck
+
 from rbhyst import api
 from rbhyst.model.deck import parse_deck
 
@@ -179,6 +179,7 @@ def test_the_shipboard_sample_strikes_its_snubbers_and_runs_clean():
     snubbers; its shock drives them in, and the impacts raise the peak acceleration at G well above
     that of the same cabinet with its snubbers out of reach."""
     from conftest import DECKS
+
     from rbhyst.model.deck import load_deck
 
     deck = load_deck(DECKS / "shipboard_cabinet_shock.toml")

@@ -263,7 +263,7 @@ class Result:
                "law": "Walton-Braun: loading K d, unloading K/e^2 from the peak"}
         if self.stops is not None:
             n, lost, force, depth = (float(v) for v in self.stops[el.row])
-            out.update(impacts=int(round(n)), peak_force_N=force, peak_penetration_m=depth, impact_J=lost)
+            out.update(impacts=round(n), peak_force_N=force, peak_penetration_m=depth, impact_J=lost)
         return out
 
     def _static_summary(self) -> dict:

@@ -76,14 +76,18 @@ def _drive(params, e, uu, f, s, g, k, a, ml, mu, u, f_out, stop):
 
 @njit(cache=True, error_model="numpy", _nrt=False)
 def redrive(params, st0, u, f_out):
-    """Drive element row e of ``params`` (ne, 2 or 3, 8: rbhyst.model.stop) from its state st0[e] through the samples
+    """Drive element row e of ``params`` (ne, 2 or 3, 8: rbhyst.model.stop) from its state st0[e] (the
+    VRM's six columns, or layout.N_STATE with its stop's) through the samples
     u[:, e] (equally spaced in time), a reversal's vertex inserted between the samples it falls
     between; f_out[i, e] the force at sample i (f_out[0] is st0's). Returns -1, or the sample at
     which an element left its calibrated range."""
     for e in range(u.shape[1]):
-        f_out[0, e] = st0[e, F] + st0[e, FS] if st0[e, FS] != 0.0 else st0[e, F]
+        stops = st0.shape[1] > FS  # (a state of the VRM's six columns alone: no stop)
+        f_out[0, e] = st0[e, F] + st0[e, FS] if stops and st0[e, FS] != 0.0 else st0[e, F]
+        ml = st0[e, DL] if stops else 0.0
+        mu = st0[e, DU] if stops else 0.0
         bad, _, _, _, _, _, _, _, _ = _drive(params, e, st0[e, U], st0[e, F], st0[e, S], st0[e, G], st0[e, K],
-                                             st0[e, A], st0[e, DL], st0[e, DU], u, f_out, u.shape[0])
+                                             st0[e, A], ml, mu, u, f_out, u.shape[0])
         if bad >= 0:
             return bad
     return -1
@@ -91,17 +95,20 @@ def redrive(params, st0, u, f_out):
 
 @njit(cache=True, error_model="numpy", _nrt=False)
 def redrive_on(params, state, u, f_out, last):
-    """redrive a window at a time: every element from its ``state`` (ne, layout.N_STATE, at sample 0 of u,
+    """redrive a window at a time: every element from its ``state`` (ne, 6 or layout.N_STATE, at sample 0 of u,
     which is driven already) through samples 1 .. m - 2 of u (m, ne), the last one only looked
     at (it decides whether m - 2 turns), or through m - 1 where ``last`` (the history's end); the
     state reached written back. The next window starts at the last sample driven, the one after
     it next: the same forces, to the bit, as redrive of the whole history. Returns as redrive."""
     stop = u.shape[0] if last else u.shape[0] - 1
     for e in range(u.shape[1]):
+        stops = state.shape[1] > DU
         bad, uu, f, s, g, k, a, ml, mu = _drive(params, e, state[e, U], state[e, F], state[e, S], state[e, G],
-                                                state[e, K], state[e, A], state[e, DL], state[e, DU], u, f_out, stop)
+                                                state[e, K], state[e, A], state[e, DL] if stops else 0.0,
+                                                state[e, DU] if stops else 0.0, u, f_out, stop)
         if bad >= 0:
             return bad
         state[e, U], state[e, F], state[e, S], state[e, G], state[e, K], state[e, A] = uu, f, s, g, k, a
-        state[e, DL], state[e, DU] = ml, mu
+        if stops:
+            state[e, DL], state[e, DU] = ml, mu
     return -1
