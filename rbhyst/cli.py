@@ -126,13 +126,13 @@ def run(
             say(f"note: {note}")
     for warning in result.warnings:
         say(f"warning: {warning}")
-    from rbhyst.report.console import element_table, mode_table, rang_lines
+    from rbhyst.report.console import element_table, mode_table, rang_lines, stop_lines
 
     summary = result.summary()
     for line in mode_table(summary["modes"]) + rang_lines(summary.get("rang")):  # what the body is, then what it did
         say(line)
     say(run_line(result))
-    for line in element_table(summary):
+    for line in element_table(summary) + stop_lines(summary):
         say(line)
     say(f"wrote {target}")
 

@@ -8,6 +8,7 @@ seed and in the CSV columns).
 
 
 import functools
+import math
 import re
 import tomllib
 from pathlib import Path
@@ -276,10 +277,40 @@ def _stroke_value(v):
     raise ValueError(f"{v!r} must be {what}")
 
 
+class Stop(_Model):
+    """A stop beyond a gap (rbhyst.model.stop: Walton and Braun's linear loading and unloading):
+    ``gap`` symmetric (m), or [lower, upper] with lower < 0 < upper (the deformations where it is
+    met), ``stiffness`` K (N/m) and ``restitution`` e (0 < e <= 1)."""
+
+    #: where the stop is met: symmetric, or [lower, upper] with lower < 0 < upper (the element's deformation)
+    gap: float | list[float]
+    #: K: the loading stiffness (unloading K / restitution^2)
+    stiffness: PosFloat
+    #: e: the coefficient of restitution of an impact on it (0 < e <= 1)
+    restitution: Annotated[float, Field(gt=0.0, le=1.0)]
+
+    @field_validator("gap", mode="before")
+    @classmethod
+    def _gap(cls, v):
+        return _stroke_value(v)
+
+    @property
+    def limits(self) -> tuple[float, float]:
+        """(lower, upper): the deformations where the stop is met."""
+        return (-self.gap, self.gap) if not isinstance(self.gap, list) else tuple(self.gap)
+
+    @property
+    def law(self) -> tuple[float, float, float, float]:
+        """(lower, upper, K, e): an Element's ``stop`` (rbhyst.model.system.Element)."""
+        return (*self.limits, float(self.stiffness), float(self.restitution))
+
+
 class Element(_Placed):
     hysteresis: str
     #: the deformation it can take (m): symmetric, or [lower, upper] with lower < 0 < upper
     stroke: float | list[float] | None = None
+    #: a stop beyond a gap: the mount bottoms out on it (rbhyst.model.stop)
+    stop: Stop | None = None
 
     @field_validator("stroke", mode="before")
     @classmethod
@@ -330,6 +361,15 @@ class IsolatorStrokes(_ByDirection):
         return _stroke_value(v)
 
 
+class IsolatorStops(_ByDirection):
+    """The stop of each of an isolator's directions, as an element's (any may be left out)."""
+
+    axial: Stop | None = None
+    shear: Stop | None = None
+    shear1: Stop | None = None
+    shear2: Stop | None = None
+
+
 def _lines(v, what: str):
     """Shear lines as a deck gives them: lists of numbers, one line alone as it is (how many lines
     and components is checked with the deck's dimension, in rbhyst.model.isolators)."""
@@ -357,6 +397,8 @@ class Isolator(_Model):
     hysteresis: IsolatorSets
     count: Annotated[int, Field(ge=1)] = 1
     stroke: IsolatorStrokes | None = None
+    #: a stop beyond a gap for each direction (any may be left out)
+    stop: IsolatorStops | None = None
     #: "mss": the two shear lines are one multiple shear spring (rbhyst.model.mss), in space
     coupling: Literal["none", "mss"] = "none"
     #: the MSS's springs (even, at least 4; rbhyst.model.mss.DEFAULT_SPRINGS without)
@@ -385,9 +427,74 @@ class Isolator(_Model):
                              "{ axial = 0.03, shear = [-0.05, 0.05] } (any may be left out)")
         return v
 
+    @field_validator("stop", mode="before")
+    @classmethod
+    def _stops(cls, v):
+        if v is not None and not (isinstance(v, dict) and set(v) <= {"axial", "shear", "shear1", "shear2"}):
+            raise ValueError(f"{v!r}: an isolator takes a stop for each direction: {{ axial = {{ gap = 0.02, "
+                             "stiffness = 1e6, restitution = 0.5 } } (axial, shear, shear1, shear2; any may be left out)")
+        return v
+
     @model_validator(mode="after")
     def _one_place(self):
         return _one_place(self)
+
+
+#: the hysteresis set of a contact's element: no VRM force of its own (kb = f0 = 0; alpha 1, any
+#: positive value, so that its branches are well defined), its stop bears it
+CONTACT_SET = "(contact)"
+
+
+class Contact(_Model):
+    """A point of the body resting on the ground along ``normal`` (from the ground towards the
+    body): compression only, never tension, a stop of ``stiffness`` and ``restitution`` met
+    once the point has moved ``gap`` (m, 0: touching at rest) against the normal
+    (rbhyst.model.stop). Frictionless."""
+
+    part: Annotated[int, Field(ge=1)] | None = None
+    vertex: Annotated[int, Field(ge=1)] | None = None
+    point: Point | None = None
+    #: from the ground towards the body, any length but zero
+    normal: Annotated[list[float], Field(min_length=2, max_length=3)]
+    #: K: the contact's loading stiffness (unloading K / restitution^2)
+    stiffness: PosFloat
+    #: e: the coefficient of restitution of a landing (0 < e <= 1)
+    restitution: Annotated[float, Field(gt=0.0, le=1.0)]
+    #: how far above the ground the point is at rest (0: touching)
+    gap: Annotated[float, Field(ge=0.0)] = 0.0
+    #: identical contacts at the point
+    count: Annotated[int, Field(ge=1)] = 1
+
+    @model_validator(mode="before")
+    @classmethod
+    def _frictionless(cls, v):
+        if isinstance(v, dict) and "friction" in v:
+            raise _key_problems([("friction", "contacts are frictionless (a contact bears along its normal only); "
+                                              "give the tangential restraint as [[elements]] or [[isolators]]")])
+        return v
+
+    @field_validator("normal")
+    @classmethod
+    def _normal(cls, v):
+        if not all(np.isfinite(x) for x in v) or not any(x != 0.0 for x in v):
+            raise ValueError(f"{v!r} must be a direction: numbers, not all zero")
+        return v
+
+    @model_validator(mode="after")
+    def _one_place(self):
+        return _one_place(self)
+
+    def element(self, dimensions: int) -> "Element":
+        """The element it is: along its normal, no VRM force (CONTACT_SET), a stop on the
+        compression side at -gap and none on the other."""
+        place = {k: getattr(self, k) for k in ("part", "vertex", "point") if getattr(self, k) is not None}
+        if dimensions == 3:
+            line = {"direction": [float(x) for x in self.normal]}
+        else:
+            line = {"angle_deg": math.degrees(math.atan2(self.normal[1], self.normal[0]))}
+        stop = Stop.model_construct(gap=[-self.gap, math.inf], stiffness=self.stiffness, restitution=self.restitution)
+        return Element.model_construct(**place, **line, hysteresis=CONTACT_SET, count=self.count, stroke=None,
+                                       stop=stop)
 
 
 class Damper(_Placed):
@@ -879,6 +986,9 @@ class Deck(_Model):
     #: mounts of an axial and shear behaviour, each expanded into uniaxial elements after the
     #: [[elements]] (rbhyst.model.isolators)
     isolators: Annotated[list[Isolator], Field(min_length=1)] | None = None
+    #: points resting on the ground, compression only (rbhyst.model.stop), expanded into elements
+    #: after the isolators'
+    contacts: Annotated[list[Contact], Field(min_length=1)] | None = None
     dampers: list[Damper] | None = None
     damping: Damping | None = None
     excitation: Excitation | None = None
@@ -899,7 +1009,7 @@ class Deck(_Model):
     @property
     def supports(self) -> bool:
         """Whether the deck has elements: [[elements]], [[isolators]] or both."""
-        return self.elements is not None or self.isolators is not None
+        return self.elements is not None or self.isolators is not None or self.contacts is not None
 
     @property
     def element_entries(self) -> tuple[tuple[Element, "Origin"], ...]:
@@ -915,6 +1025,9 @@ class Deck(_Model):
             n = self.body.dimensions
             for k, iso in enumerate(self.isolators, start=1):
                 out += [(el, Origin(k, role)) for el, role in expand(iso, n, Element)]
+        if self.contacts and self.body is not None:
+            n = self.body.dimensions
+            out += [(c.element(n), Origin(k, "contact")) for k, c in enumerate(self.contacts, start=1)]
         return tuple(out)
 
     @property
@@ -988,10 +1101,16 @@ KEY_UNITS: dict[tuple[str, ...], str] = {
     **{(group, name): unit for group in ("elements", "dampers") for name, unit in (
         ("angle_deg", "°"), ("point", "m"), ("count", ""), ("vertex", ""), ("part", ""), ("direction", ""))},
     ("elements", "stroke"): "m", ("dampers", "c"): "N s/m",
+    ("elements", "stop", "gap"): "m", ("elements", "stop", "stiffness"): "N/m", ("elements", "stop", "restitution"): "",
+    **{("isolators", "stop", name, key): unit for name in ("axial", "shear", "shear1", "shear2")
+       for key, unit in (("gap", "m"), ("stiffness", "N/m"), ("restitution", ""))},
     **{("isolators", name): unit for name, unit in (
         ("axial_deg", "°"), ("shear_deg", "°"), ("point", "m"), ("count", ""), ("vertex", ""), ("part", ""),
         ("axial", ""), ("shear", ""), ("coupling", ""), ("springs", ""), ("reference", "m"))},
     **{("isolators", "stroke", name): "m" for name in ("axial", "shear", "shear1", "shear2")},
+    **{("contacts", name): unit for name, unit in (
+        ("point", "m"), ("vertex", ""), ("part", ""), ("normal", ""), ("stiffness", "N/m"), ("restitution", ""),
+        ("gap", "m"), ("count", ""))},
     **{(*group, "*", name): unit for group in (("excitation", "support"), ("excitation", "force"))
        for name, unit in (("amplitude", "signal"), ("scale", ""), ("frequency_hz", "Hz"), ("phase_deg", "°"),
                           ("start", "s"), ("duration", "s"), ("dt", "s"), ("cycles", ""), ("ramp_cycles", ""),
@@ -1089,9 +1208,10 @@ def cross_references(deck: Deck) -> list[str]:
                                 f"defined: {', '.join(sorted(deck.hysteresis))}")
         if iso.vertex is not None and deck.body is not None:
             problems += [f"isolators[{k}].{p}" for p in vertex_reference_problems(deck.body, iso.part, iso.vertex)]
-    for k, dp in enumerate(deck.dampers or [], start=1):
-        if dp.vertex is not None and deck.body is not None:
-            problems += [f"dampers[{k}].{p}" for p in vertex_reference_problems(deck.body, dp.part, dp.vertex)]
+    for section in ("dampers", "contacts"):
+        for k, dp in enumerate(getattr(deck, section) or [], start=1):
+            if dp.vertex is not None and deck.body is not None:
+                problems += [f"{section}[{k}].{p}" for p in vertex_reference_problems(deck.body, dp.part, dp.vertex)]
     return problems
 
 
@@ -1151,6 +1271,9 @@ def dimension_problems(deck: Deck) -> list[str]:
                                     "action as angle_deg from x1")
                 elif el.angle_deg is None:
                     problems.append(f"{section}[{k}].angle_deg: required key is missing")
+    for k, c in enumerate(deck.contacts or [], start=1):
+        problems += _dimension_of(f"contacts[{k}].point", c.point, n)
+        problems += _dimension_of(f"contacts[{k}].normal", c.normal, n)
     from rbhyst.model.isolators import isolator_problems
 
     for k, iso in enumerate(deck.isolators or [], start=1):

@@ -31,6 +31,10 @@ import numpy as np
 
 PARAMS = ("kb", "f0", "alpha", "beta1", "beta2", "gamma1", "gamma2", "gamma3")
 KB, F0, ALPHA, BETA1, BETA2, GAMMA1, GAMMA2, GAMMA3 = range(8)
+#: a stop's parameters (rbhyst.model.stop): the third row of an element's kernel parameters after its
+#: VRM branches (rbhyst.model.system.System.kernel_params), here where importing loads no numba
+STOP_ROW = 2
+STOP_LOWER, STOP_UPPER, STOP_K, STOP_E = 0, 1, 2, 3  # gaps (m, lower < 0 < upper; +-inf: none), N/m, ratio
 LOADING, UNLOADING = 0, 1
 
 #: Largest beta2*u for which exp() is finite with room to spare: beyond it an

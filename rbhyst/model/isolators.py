@@ -34,11 +34,13 @@ class Origin:
 
     @property
     def isolator(self) -> int | None:
-        return self.index if self.role is not None else None
+        return self.index if self.role not in (None, "contact") else None
 
     @property
     def label(self) -> str:
-        """'elements[3]' or 'isolators[2] shear1', as a user finds it in the deck."""
+        """'elements[3]', 'isolators[2] shear1' or 'contacts[1]', as a user finds it in the deck."""
+        if self.role == "contact":
+            return f"contacts[{self.index}]"
         return f"elements[{self.index}]" if self.role is None else f"isolators[{self.index}] {self.role}"
 
 
@@ -201,10 +203,10 @@ def _coupling_problems(iso, key: str) -> list[str]:
     if sets.shear is None and sets.shear1 != sets.shear2:
         problems.append(f"{key}.hysteresis.shear2: {sets.shear2!r} is not shear1's {sets.shear1!r}: a multiple "
                         "shear spring has one behaviour in its plane; give one `shear` set")
-    strokes = iso.stroke
-    if strokes is not None:
-        problems += [f"{key}.stroke.{k}: not with coupling = \"mss\" (its shear is one deformation in the plane, "
-                     "not two)" for k in ("shear", "shear1", "shear2") if getattr(strokes, k) is not None]
+    for group, what in ((iso.stroke, "stroke"), (iso.stop, "stop")):
+        if group is not None:
+            problems += [f"{key}.{what}.{k}: not with coupling = \"mss\" (its shear is one deformation in the "
+                         "plane, not two)" for k in ("shear", "shear1", "shear2") if getattr(group, k) is not None]
     return problems
 
 
@@ -218,7 +220,7 @@ def expand(iso, n: int, element_cls) -> list[tuple[object, str]]:
     """The uniaxial elements of a checked isolator (``element_cls``: rbhyst.model.deck.Element),
     with their roles: axial, shear1, shear2 in space; axial, shear in the plane."""
     place = {k: getattr(iso, k) for k in ("part", "vertex", "point") if getattr(iso, k) is not None}
-    sets, strokes = iso.hysteresis, iso.stroke
+    sets, strokes, stops = iso.hysteresis, iso.stroke, iso.stop
 
     def pick(group, role):
         if group is None:
@@ -232,18 +234,21 @@ def expand(iso, n: int, element_cls) -> list[tuple[object, str]]:
         shear = iso.shear if iso.shear is not None else default_shear(iso.axial)
         lines = (list(iso.axial), list(shear[0]), list(shear[1]))
         if iso.coupling == "mss":
-            return _expand_mss(iso, place, lines, element_cls, pick(strokes, "axial"))
+            return _expand_mss(iso, place, lines, element_cls, pick(strokes, "axial"), pick(stops, "axial"))
         for role, line in zip(ROLES_SPACE, lines):
-            stroke = pick(strokes, role)
             out.append((element_cls(**place, direction=line, hysteresis=pick(sets, role), count=iso.count,
-                                    **({"stroke": stroke} if stroke is not None else {})), role))
+                                    **_limits(pick(strokes, role), pick(stops, role))), role))
     else:
         shear_deg = iso.shear_deg if iso.shear_deg is not None else default_shear_deg(iso.axial_deg)
         for role, angle in zip(ROLES_PLANE, (iso.axial_deg, shear_deg)):
-            stroke = pick(strokes, role)
             out.append((element_cls(**place, angle_deg=angle, hysteresis=pick(sets, role), count=iso.count,
-                                    **({"stroke": stroke} if stroke is not None else {})), role))
+                                    **_limits(pick(strokes, role), pick(stops, role))), role))
     return out
+
+
+def _limits(stroke, stop) -> dict:
+    """An element's ``stroke`` and ``stop`` keys, those given."""
+    return {**({"stroke": stroke} if stroke is not None else {}), **({"stop": stop} if stop is not None else {})}
 
 
 def mss_set_name(name: str, springs: int, reference: float | None) -> str:
@@ -252,7 +257,7 @@ def mss_set_name(name: str, springs: int, reference: float | None) -> str:
     return f"{name} (mss {springs}" + (f", {reference:g} m)" if reference is not None else ")")
 
 
-def _expand_mss(iso, place, lines, element_cls, axial_stroke) -> list[tuple[object, str]]:
+def _expand_mss(iso, place, lines, element_cls, axial_stroke, axial_stop) -> list[tuple[object, str]]:
     """An MSS isolator's elements: the axial one, then its springs at pi i / n from shear line 1
     towards shear line 2 (roles mss1 .. mssn), each of the springs' set."""
     from rbhyst.model.mss import DEFAULT_SPRINGS, spring_cosines, spring_label
@@ -261,7 +266,7 @@ def _expand_mss(iso, place, lines, element_cls, axial_stroke) -> list[tuple[obje
     sets = iso.hysteresis
     name = mss_set_name(sets.shear or sets.shear1, n, iso.reference)
     out = [(element_cls(**place, direction=lines[0], hysteresis=sets.axial, count=iso.count,
-                        **({"stroke": axial_stroke} if axial_stroke is not None else {})), "axial")]
+                        **_limits(axial_stroke, axial_stop)), "axial")]
     s1, s2 = _unit(lines[1]), _unit(lines[2])
     for i, (c, s) in enumerate(zip(*spring_cosines(n)), start=1):
         out.append((element_cls(**place, direction=_clean(c * s1 + s * s2), hysteresis=name, count=iso.count),

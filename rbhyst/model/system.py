@@ -340,6 +340,8 @@ class Element:
     role: str | None = None
     #: where it is in the deck: "elements[3]" or "isolators[2] shear1"
     label: str = ""
+    #: (lower, upper, K, e): a stop met at the deformations lower < 0 < upper (rbhyst.model.stop)
+    stop: tuple[float, float, float, float] | None = None
 
     @property
     def line(self) -> str:
@@ -488,6 +490,27 @@ class System:
         if self.kinematics != "exact":
             return -1
         return 2 if self.coordinates == PLANE else -2
+
+    @property
+    def has_stops(self) -> bool:
+        """Whether any element bears on a stop beyond a gap (rbhyst.model.stop)."""
+        return any(el.stop is not None for el in self.elements)
+
+    @property
+    def kernel_params(self) -> np.ndarray:
+        """The kernels' parameters: ``params`` (ne, 2, 8), and where an element has a stop a third
+        row each (rbhyst.model.stop.STOP_ROW: lower and upper gap, K, e; +-inf, 0, 1 without)."""
+        if not self.has_stops:
+            return np.ascontiguousarray(self.params, dtype=float)
+        from rbhyst.model.hysteresis import STOP_E, STOP_K, STOP_LOWER, STOP_UPPER
+
+        out = np.zeros((len(self.params), 3, self.params.shape[2]))
+        out[:, :2] = self.params
+        out[:, 2, STOP_LOWER], out[:, 2, STOP_UPPER], out[:, 2, STOP_E] = -np.inf, np.inf, 1.0
+        for el in self.elements:
+            if el.stop is not None:
+                out[el.row, 2, [STOP_LOWER, STOP_UPPER, STOP_K, STOP_E]] = el.stop
+        return out
 
     @property
     def kernel_axial(self) -> np.ndarray:
@@ -801,8 +824,14 @@ def _kernel_rows(deck: dk.Deck, body: Body, exact: bool):
         row = int(row_of[i])
         mult[row] += el.count
         elements.append(Element((float(xs[i][0]), float(xs[i][1])), el.angle_deg, el.hysteresis, el.count, row,
-                                el.stroke_limits, **_origin(origin)))
+                                el.stroke_limits, **_origin(origin), **_stop_of(el)))
     return rows, axial, names, mult, elements
+
+
+def _stop_of(el) -> dict:
+    """An Element's ``stop`` key for a deck element with one (rbhyst.model.deck.Stop.law)."""
+    stop = getattr(el, "stop", None)
+    return {} if stop is None else {"stop": stop.law}
 
 
 def _origin(origin) -> dict:
@@ -824,7 +853,9 @@ def _row_groups(keyed: np.ndarray, deck: dk.Deck) -> tuple[list[int], np.ndarray
     firsts: list[int] = []
     row_of = np.empty(len(key), dtype=int)
     for i, (k, el) in enumerate(zip(key.tolist(), deck.all_elements)):
-        row = rows.setdefault((*k, set_ids[el.hysteresis]), len(firsts))
+        # (elements with different stops part: a stop's state is its row's)
+        stop = None if getattr(el, "stop", None) is None else el.stop.law
+        row = rows.setdefault((*k, set_ids[el.hysteresis], stop), len(firsts))
         if row == len(firsts):
             firsts.append(i)
         row_of[i] = row
@@ -837,7 +868,13 @@ def _set_stiffnesses(deck: dk.Deck) -> tuple[dict, dict, dict]:
     sets = {name: hs.array() for name, hs in deck.hysteresis.items()}
     sets.update(_mss_sets(deck, sets))
     k_rev, k_el = {}, {}
+    if deck.contacts:
+        # a contact's element has no force of its own: its stop bears it (dk.Contact.element)
+        sets[dk.CONTACT_SET] = np.array([[0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0]] * 2)
+        k_rev[dk.CONTACT_SET] = k_el[dk.CONTACT_SET] = 0.0
     for name, p in sets.items():
+        if name == dk.CONTACT_SET:
+            continue
         k, k_el[name], _ = stiffnesses_at_zero(p)
         if not k > 0.0:
             raise InputError(f"hysteresis.{name}: the stiffness at a reversal at u = 0 is {k:.6g} N/m; it must be > 0")
@@ -1048,7 +1085,7 @@ def _kernel_rows_space(deck: dk.Deck, body, frame, exact: bool = False):
         r = int(row_of[i])
         mult[r] += el.count
         elements.append(Element(tuple(float(v) for v in xs[i]), None, el.hysteresis, el.count, r, el.stroke_limits,
-                                tuple(float(v) for v in ds[i]), **_origin(origin)))
+                                tuple(float(v) for v in ds[i]), **_origin(origin), **_stop_of(el)))
     return rows, names, mult, elements, np.concatenate([arms[f] for f in firsts])
 
 

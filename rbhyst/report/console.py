@@ -88,6 +88,29 @@ def element_table(summary: dict, all_up_to: int = ALL_UP_TO, shown: int = SHOWN)
     return lines
 
 
+def stop_lines(summary: dict) -> list[str]:
+    """What the stops met (summary.json's elements' ``stop``, rbhyst.model.stop): one line for the
+    entries that struck theirs (impacts, peak contact force and penetration, energy lost), one for
+    those that never did; nothing where no element has a stop."""
+    struck, clear, k = [], [], 1
+    for el in summary.get("elements") or []:
+        stop = el.get("stop")
+        name = f"e{k}" if el["count"] == 1 else f"e{k}-e{k + el['count'] - 1} (each)"
+        k += el["count"]
+        if stop is None or "impacts" not in stop:
+            continue
+        if stop["impacts"] or stop["peak_force_N"] > 0.0:
+            struck.append(f"{name}: {stop['impacts']} impact{'s' * (stop['impacts'] != 1)}, peak "
+                          f"{stop['peak_force_N']:.4g} N at {stop['peak_penetration_m'] * 1e3:.3g} mm, "
+                          f"{stop['impact_J']:.3g} J lost")
+        else:
+            clear.append(name)
+    lines = [f"stops struck: {'; '.join(struck)}"] if struck else []
+    if clear:
+        lines.append(f"stops never reached: {', '.join(clear)}")
+    return lines
+
+
 def _percent(used: float) -> str:
     text = f"{100 * used:.0f}%" if used >= 0.1 else f"{100 * used:#.2g}%"
     return text + " over" if used > 1.0 else text

@@ -130,9 +130,19 @@ def stroke_warnings(result: Result) -> list[str]:
                 out.append(f"element {span} ({_which(el)}) goes beyond its stroke: {use['peak_deformation_m']:.4g} m "
                            f"at t = {use['time_of_peak_s']:.4g} s against a limit of "
                            f"{el.stroke[1] if use['peak_deformation_m'] > 0 else el.stroke[0]:g} m "
-                           f"({use['utilization']:.0%} of it)")
+                           f"({use['utilization']:.0%} of it)" + _beside(el))
         k += el.count
     return out
+
+
+def _beside(el) -> str:
+    """What a stroke warning says of the element's stop, where it has one."""
+    if el.stop is None:
+        return ""
+    lo, hi = el.stop[:2]
+    where = "within" if el.stroke[0] <= lo and hi <= el.stroke[1] else "beyond"
+    return (f"; it has a stop at [{lo:g}, {hi:g}] m ({where} the stroke), which bears it from there: the "
+            "stroke is only compared, the stop is what the mount meets")
 
 
 def response_warnings(result: Result) -> list[str]:

@@ -24,6 +24,7 @@ from rbhyst.model.kinematics import loads_at
 from rbhyst.model.system import System
 from rbhyst.solve.result import Result, RunStats
 from rbhyst.solve.static import at_rest_under_gravity
+from rbhyst.solve.stops import element_forces, stop_record
 from rbhyst.model.settings import Settings, settings_from_deck  # noqa: F401  (re-exported: the run's inputs)
 
 #: bytes of rows a chunk may hold (raw state and table): bounds a run's memory
@@ -283,7 +284,7 @@ class FixedStepPlan(Plan):
             self.coef[int(nsub)] = method.coefficients(mass, k0, self.cm[:system.n], steps)  # (one set a level)
             self.level0[int(nsub)] = level0
         self.bvec = np.ascontiguousarray(system.bvec)
-        self.params = np.ascontiguousarray(system.params)
+        self.params = system.kernel_params  # (with each stop's row where there are stops)
         self.axial = system.kernel_axial
         # the monitor's trace bound, b_e^T M^-1 b_e: with exact kinematics the rotation's entry of
         # b_e(q) turns between +-sqrt(b3^2 + axial^2), its largest taken
@@ -328,7 +329,7 @@ class FixedStepPlan(Plan):
         # whatever its direction; until it moves, an element's tangent is the stiffer of its two
         # first moves, so the monitor sees a stiff body at rest before the first step that moves it
         for e in range(ne):
-            st[0, e, kernels.K] = stiffnesses_at_zero(self.params[e])[2]
+            st[0, e, kernels.K] = stiffnesses_at_zero(self.system.params[e])[2]
         static = self.system.static
         q0 = static.q if static is not None else np.zeros(n)
         p0 = loads_at(self.system.excitation.load(np.zeros(1), self.system.mass), q0[None], n,
@@ -336,6 +337,8 @@ class FixedStepPlan(Plan):
         if static is not None:  # at rest at the static equilibrium under gravity, its branches as the path left them
             st[0] = static.st
             st[0, :, kernels.UP] = st[0, :, kernels.U]  # (no step before the first)
+            # the stops' record is the run's: a contact the weight rests on has not struck
+            st[0, :, [kernels.IMP, kernels.NI, kernels.PF, kernels.PD]] = 0.0
             x[x_slice(n, 0)] = static.q
             p0 = p0 - static.r
         x[x_slice(n, 2)] = self.minv * p0  # equilibrium at t = 0: records rarely start at zero
@@ -390,7 +393,7 @@ class FixedStepPlan(Plan):
         """The row at t = 0 of the state initial_state gives."""
         n = self.system.n
         return Raw(t=np.zeros(1), d=x[None, x_slice(n, 0)].copy(), v=np.zeros((1, n)),
-                   u=st[None, 0, :, kernels.U].copy(), f=st[None, 0, :, kernels.F].copy(),
+                   u=st[None, 0, :, kernels.U].copy(), f=element_forces(st[0])[None],
                    e=np.zeros((1, kernels.N_E)))
 
     def chunks(self, x: np.ndarray, st: np.ndarray, fine: bool = False, into=None):
@@ -514,7 +517,8 @@ class FixedStepPlan(Plan):
         )
         return Result(system=system, settings=s, columns=self.layout.names, table=table, extremes=rows.extremes,
                       plot=rows.plot, stats=stats, layout=self.layout, csv_path=rows.csv_path, compared=rows.compared,
-                      compare_every=rows.compare_every, spectra=run_spectra(system, s, rows.body_spectra()))
+                      compare_every=rows.compare_every, spectra=run_spectra(system, s, rows.body_spectra()),
+                      stops=stop_record(st[int(x[X_CUR])]) if system.has_stops else None)
 
 
 class _Buffers:

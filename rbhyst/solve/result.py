@@ -72,6 +72,9 @@ class Result:
     provenance: dict | None = None
     #: the kinematic model and the error it carries (rbhyst.solve.kinematic), when checked
     kinematics: dict | None = None
+    #: (kernel rows, 4) where elements have stops: each row's contacts begun, energy lost in its
+    #: impacts (J, one element), largest contact force (N) and penetration (m) (plan.stop_record)
+    stops: np.ndarray | None = None
 
     @property
     def q_sample(self) -> np.ndarray:
@@ -217,7 +220,17 @@ class Result:
             "input_J": float(self._final("E_input_J")),
             "hysteretic_J": float(self._final("E_hysteretic_J")),
             **({"viscous_J": float(self._final("E_viscous_J"))} if "E_viscous_J" in self.columns else {}),
+            **({"impact_J": self.impact_energy,
+                "impact_note": "lost in the stops' impacts; part of hysteretic_J (the work of the mounts' forces), "
+                               "so input = kinetic + hysteretic + viscous + error"} if self.stops is not None else {}),
         }
+
+    @property
+    def impact_energy(self) -> float:
+        """The energy every stop's impacts lost over the run (J; 0 without stops)."""
+        if self.stops is None:
+            return 0.0
+        return float(np.sum(self.system.mult * self.stops[:, 1]))
 
     def elements_summary(self) -> list[dict]:
         """Each [[elements]] entry, then each direction of each [[isolators]] entry: place, set,
@@ -234,14 +247,31 @@ class Result:
                 entry.update(isolator=el.isolator, role=el.role)
             if el.stroke is not None:
                 entry["stroke"] = stroke_use(e, f"e{k}_u_m", el.stroke)
+            if el.stop is not None:
+                entry["stop"] = self._stop_summary(el)
             out.append(entry)
             k += el.count
         return out
 
+    def _stop_summary(self, el) -> dict:
+        """An element's stop: its law and, for each of its ``count`` elements alike, the contacts
+        begun, the largest contact force and penetration, the energy its impacts lost."""
+        lo, hi, k, r = el.stop
+        # (a contact's stop has one side: the other is null, JSON having no infinity)
+        out = {"gap_m": [lo + 0.0 if np.isfinite(lo) else None, hi if np.isfinite(hi) else None],
+               "stiffness_N_m": k, "restitution": r,
+               "law": "Walton-Braun: loading K d, unloading K/e^2 from the peak"}
+        if self.stops is not None:
+            n, lost, force, depth = (float(v) for v in self.stops[el.row])
+            out.update(impacts=round(n), peak_force_N=force, peak_penetration_m=depth, impact_J=lost)
+        return out
+
     def _static_summary(self) -> dict:
         st = self.system.static
+        from rbhyst.solve.stops import element_forces
+
         u = self.system.expand(st.st[None, :, 0])[0]
-        f = self.system.expand(st.st[None, :, 1])[0]
+        f = self.system.expand(element_forces(st.st)[None] + 0.0)[0]
         q = self.system.to_deck(st.q) if hasattr(self.system, "to_deck") else st.q
         return {**{c.column("d"): float(x) for c, x in zip(self.system.coordinates, q)},
                 "elements": [{"u_m": float(a), "f_N": float(b)} for a, b in zip(u, f)],

@@ -42,7 +42,7 @@ def static_equilibrium(system) -> Static:
     update = kernel("static_update")  # (built at install: a run under gravity loads no numba)
     w = np.asarray(system.weight, dtype=float)
     bvec = np.ascontiguousarray(system.bvec, dtype=float)
-    params = np.ascontiguousarray(system.params, dtype=float)
+    params = system.kernel_params  # (stops bear the weight too: a body resting on its contacts)
     mult = np.ascontiguousarray(system.mult, dtype=float)
     ne, n = bvec.shape
     axial = np.ascontiguousarray(system.kernel_axial, dtype=float)
@@ -51,7 +51,7 @@ def static_equilibrium(system) -> Static:
     bq = bvec.copy()  # the rows at q (exact kinematics)
     st = np.zeros((2, ne, kernels.N_STATE))
     for e in range(ne):
-        st[0, e, kernels.K] = max(virgin_tangent(params[e], 1.0), virgin_tangent(params[e], -1.0))
+        st[0, e, kernels.K] = max(virgin_tangent(params[e, :2], 1.0), virgin_tangent(params[e, :2], -1.0))
     kpeak = np.zeros((ne, 2))
     cur = 0
     q = np.zeros(n)
@@ -71,7 +71,7 @@ def static_equilibrium(system) -> Static:
             total += 1
             if np.max(np.abs(res)) <= TOLERANCE * scale:
                 break
-            kt = (bq.T * (mult * kpeak[:, 1])) @ bq
+            kt = (bq.T * (mult * (kpeak[:, 1] + touching(params, st[1 - cur])))) @ bq
             if rot >= 0:
                 kt[rot, rot] += kgeo
             # (in space, exact: rows for a turn in the body's axes; the forces' geometric stiffness
@@ -90,6 +90,20 @@ def static_equilibrium(system) -> Static:
                                 "the elements cannot carry it")
         cur = 1 - cur  # the trial state becomes the committed one
     return Static(q=q, st=st[cur].copy(), r=r, residual=float(np.max(np.abs(w - r)) / scale), iterations=total)
+
+
+def touching(params: np.ndarray, st: np.ndarray) -> np.ndarray:
+    """(rows,) the loading stiffness K of each stop met exactly at its gap, bearing nothing yet (a
+    contact touching the ground at rest): Newton's matrix takes it, as the stop takes it from
+    there on (rbhyst.model.stop); 0 elsewhere."""
+    from rbhyst.model.hysteresis import STOP_K, STOP_LOWER, STOP_ROW, STOP_UPPER
+
+    if params.shape[1] <= STOP_ROW:
+        return np.zeros(len(st))
+    p = params[:, STOP_ROW]
+    u = st[:, kernels.U]
+    at_gap = ((u == p[:, STOP_LOWER]) | (u == p[:, STOP_UPPER])) & (st[:, kernels.FS] == 0.0)
+    return np.where(at_gap, p[:, STOP_K], 0.0)
 
 
 def _turned(q: np.ndarray, dq: np.ndarray) -> np.ndarray:

@@ -168,13 +168,14 @@ def _basis(system, pieces: Pieces, spin, rg):
 
 
 def _initial_state(system, pieces: Pieces):
-    """(4, rows) branch sign, u_P, gap and antiderivative of every element row at the start
+    """(6, rows) branch sign, u_P, gap and antiderivative of every element row at the start, its
+    stop's held peaks
     (gap NaN: virgin, worked out in the kernel), and q at the start: rest, at the static
     equilibrium under gravity when there is one, the elements as its path left them."""
-    from rbhyst.solve.kernels.layout import A, G, S, U
+    from rbhyst.solve.kernels.layout import A, DL, DU, G, S, U
 
     s0 = _initial_branches(system, pieces)
-    init = np.zeros((4, len(s0)))
+    init = np.zeros((6, len(s0)))  # (rows 4, 5: the stops' held peaks)
     init[0] = s0
     init[2] = np.nan
     y0 = np.zeros(system.n)
@@ -186,6 +187,8 @@ def _initial_state(system, pieces: Pieces):
         init[1, moved] = static.st[moved, U]
         init[2, moved] = static.st[moved, G]
         init[3, moved] = static.st[moved, A]
+        init[4] = static.st[:, DL]
+        init[5] = static.st[:, DU]
     return init, y0
 
 
@@ -224,6 +227,7 @@ class Solution:
     ef: np.ndarray
     eh: np.ndarray
     stats: dict
+    stops: np.ndarray | None = None  # (rows, 4) as rbhyst.solve.plan.stop_record's
 
     @property
     def n(self) -> int:
@@ -267,9 +271,9 @@ def integrate(system, t_out: np.ndarray, rtol: float = RTOL, pieces=None, max_st
     info = np.zeros(R_INFO)
     # M^-1 as a tuple: its length n is a constant of the compiled kernel (one compilation per n)
     minv = tuple(1.0 / system.mass)
-    args = (minv, np.ascontiguousarray(system.bvec), system.kernel_axial, system.rotation_index, system.mult, np.ascontiguousarray(system.params),
+    args = (minv, np.ascontiguousarray(system.bvec), system.kernel_axial, system.rotation_index, system.mult, system.kernel_params,
             np.ascontiguousarray(system.kernel_damping))
-    work = (np.zeros((6, ne)), np.zeros((7, width)), np.zeros((16, width)), np.zeros((7, width)), np.zeros((4, max(system.excitation.width, ne))),
+    work = (np.zeros((13, ne)), np.zeros((7, width)), np.zeros((16, width)), np.zeros((7, width)), np.zeros((4, max(system.excitation.width, ne))),
             np.zeros(NS + 1))
     tail = (rtol, atol, init, y0, 1e-6, int(max_steps), _A, _B, _C, _E3, _E5, _D, out_y, out_eu, out_ef, out_eh, info, *work)
     _integrate = kernel("integrate", n)
@@ -313,7 +317,21 @@ def integrate(system, t_out: np.ndarray, rtol: float = RTOL, pieces=None, max_st
         "largest_step_s": float(info[R_HMAX]),
         "wall_s": wall,
     }
-    return Solution(t_out, out_y, out_eu, out_ef, out_eh, stats)
+    ms = work[0][6:13]  # the stops' (kernels.dop853._stops_at): as plan.stop_record's columns, the
+    # loss counted from the start (a contact the weight rests on has lost what its loading did)
+    lost = ms[2] + _open_loss(system, ms[0], ms[1]) - _open_loss(system, init[4], init[5])
+    stops = np.ascontiguousarray(np.column_stack([ms[3], lost, ms[4], ms[5]]))
+    return Solution(t_out, out_y, out_eu, out_ef, out_eh, stats, stops if system.has_stops else None)
+
+
+def _open_loss(system, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
+    """(rows,) what each row's contact on at peaks lower, upper has lost (0.5 K (1 - e^2) d_max^2)."""
+    from rbhyst.model.hysteresis import STOP_E, STOP_K, STOP_ROW
+
+    if not system.has_stops:
+        return np.zeros(len(lower))
+    p = system.kernel_params[:, STOP_ROW]
+    return 0.5 * p[:, STOP_K] * (1.0 - p[:, STOP_E] ** 2) * np.maximum(lower, upper) ** 2
 
 
 def solve_with_stats(system, settings, rtol: float = RTOL, t_out: np.ndarray | None = None,
@@ -368,7 +386,7 @@ def solve_with_stats(system, settings, rtol: float = RTOL, t_out: np.ndarray | N
     stats = RunStats(steps=n_steps, steps_taken=sol.stats["steps"], wall_s=sol.stats["wall_s"])
     result = Result(system=system, settings=settings, columns=layout.names, table=table, extremes=rows.extremes,
                     plot=rows.plot, stats=stats, layout=layout, csv_path=rows.csv_path, compared=rows.compared,
-                    compare_every=rows.compare_every, solver=sol.stats,
+                    compare_every=rows.compare_every, solver=sol.stats, stops=sol.stops,
                     spectra=run_spectra(system, settings, rows.body_spectra()))
     return result, sol.stats
 

@@ -18,7 +18,7 @@ from pathlib import Path
 PACKAGE = Path(__file__).resolve().parents[2]
 
 #: every source file whose code (or constants) the exported kernels compile in
-SOURCES = ("model/hysteresis.py", "model/vrm.py", "model/signals.py", "solve/kernels/layout.py",
+SOURCES = ("model/hysteresis.py", "model/vrm.py", "model/stop.py", "model/signals.py", "solve/kernels/layout.py",
            "solve/kernels/elements.py", "solve/kernels/rotations.py", "solve/kernels/loop.py", "solve/kernels/through.py", "solve/kernels/csvfmt.py", "solve/kernels/reduce.py",
            "solve/kernels/redrive.py", "solve/kernels/modified.py", "solve/kernels/estimate.py",
            "solve/kernels/dop853.py", "solve/kernels/dop853_layout.py", "solve/integrators/steps.py",

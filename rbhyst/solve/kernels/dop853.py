@@ -16,6 +16,7 @@ from numba import njit
 from rbhyst.model.hysteresis import ALPHA, EXP_ARG_MAX
 from rbhyst.solve.kernels.dop853_layout import (NS, R_ELEMENT, R_EVENTS, R_FEV, R_HMAX, R_HMIN, R_REJECTED, R_START_FLIPS, R_STATUS, R_STEPS, R_TIME, SIMULTANEOUS, ST_NONFINITE, ST_OK, ST_OVERFLOW, ST_STEP_TOO_SMALL, ST_TOO_MANY_STEPS)
 from rbhyst.model.signals import HALF_SINE, HAVERSINE, ROW_SIZE as ROW, SAWTOOTH, SINE
+from rbhyst.model.stop import STOP_E, STOP_K, STOP_LOWER, STOP_ROW, STOP_UPPER, stop_force
 from rbhyst.model.vrm import branch_eval, branch_row
 from rbhyst.solve.kernels.layout import SPATIAL
 from rbhyst.solve.kernels.elements import turned_dampers
@@ -181,7 +182,7 @@ def _a_el(bvec, axial, rot, e, y, f, n):
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
-def _rhs(t, y, k, brk, pcoef, sig, minv, bvec, axial, rot, mult, params, cm, s, up, gp, p, dy):
+def _rhs(t, y, k, brk, pcoef, sig, minv, bvec, axial, rot, mult, params, cm, s, up, gp, ms, p, dy):
     """dy = (v, M^-1 (p - R - C v), p . v, v . C v) (seed eq. 11); p (4, max(n, ne)) is work
     space (the load, R, C v, each element's mult f); returns the first element that
     overflowed, or -1."""
@@ -191,16 +192,21 @@ def _rhs(t, y, k, brk, pcoef, sig, minv, bvec, axial, rot, mult, params, cm, s, 
     cv = p[2]
     mf = p[3]
     if rot == SPATIAL:  # a body in space, exact: its own axes (rbhyst.solve.kernels.rotations)
-        return _rhs_spatial(t, y, k, brk, pcoef, sig, minv, bvec, axial, mult, params, cm, s, up, gp, p, dy)
+        return _rhs_spatial(t, y, k, brk, pcoef, sig, minv, bvec, axial, mult, params, cm, s, up, gp, ms, p, dy)
     if rot >= 0 and pcoef.shape[2] > n:  # forces whose arm turns with the body
         _load(t, k, brk, pcoef, sig, load, n + 2)
         _turn_arm(load, y, rot, n)
     else:
         _load(t, k, brk, pcoef, sig, load, n)
+    stops = params.shape[1] > STOP_ROW
     for e in range(bvec.shape[0]):
-        f, _, ok = _force(params, e, s[e], up[e], gp[e], _u_el(bvec, axial, rot, e, y, n))
+        u = _u_el(bvec, axial, rot, e, y, n)
+        f, _, ok = _force(params, e, s[e], up[e], gp[e], u)
         if not ok:
             return e
+        if stops:
+            fs, _ = stop_force(params, e, u, ms[0, e], ms[1, e])
+            f += fs
         mf[e] = mult[e] * f
     for i in range(n):
         # R = sum mult f b, each component summed in a register in the elements' order
@@ -242,7 +248,7 @@ def _finish_rhs(y, minv, cm, rot, load, r, cv, dy, n):
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
-def _rhs_spatial(t, y, k, brk, pcoef, sig, minv, bvec, axial, mult, params, cm, s, up, gp, p, dy):
+def _rhs_spatial(t, y, k, brk, pcoef, sig, minv, bvec, axial, mult, params, cm, s, up, gp, ms, p, dy):
     """_rhs for a body in space with exact kinematics: q = (u, psi), v = (u', omega) with omega
     in the body's axes; psi' = J_r(psi)^-1 omega, M v' = p - R - C v - (0, omega x J omega), the
     moments of p and R in the body's axes (rbhyst.solve.kernels.rotations)."""
@@ -260,12 +266,17 @@ def _rhs_spatial(t, y, k, brk, pcoef, sig, minv, bvec, axial, mult, params, cm, 
         turn_moments(rm, load, 0.0, 0.0, 0.0, axial)
     for i in range(n):
         r[i] = 0.0
-    for e in range(bvec.shape[0]):
+    stops = params.shape[1] > STOP_ROW
+    ne = bvec.shape[0]
+    for e in range(ne):
         a = arm(axial, e, rm)
         u = bvec[e, 0] * y[0] + bvec[e, 1] * y[1] + bvec[e, 2] * y[2] + a[0]
         f, _, ok = _force(params, e, s[e], up[e], gp[e], u)
         if not ok:
             return e
+        if stops:
+            fs, _ = stop_force(params, e, u, ms[0, e], ms[1, e])
+            f += fs
         m = mult[e] * f
         r[0] += m * bvec[e, 0]
         r[1] += m * bvec[e, 1]
@@ -323,7 +334,7 @@ def _g_dense(F, y_old, x, bvec, axial, rot, e, s, n):
 @njit(cache=True, error_model="numpy", _nrt=False)
 def _integrate(minv, bvec, axial, rot, mult, params, cm, brk, pcoef, sig, t_out, rtol, atol, init, y0, h_first, max_steps,
                A, B, C, E3, E5, D, out_y, out_eu, out_ef, out_eh, info, el, vec, K, F, p, gs):
-    """The whole integration; el (6, ne), vec (7, ny), K (16, ny), F (7, ny), p (4, max(n, ne)), gs (NS + 1,)
+    """The whole integration; el (13, ne), vec (7, ny), K (16, ny), F (7, ny), p (4, max(n, ne)), gs (NS + 1,)
     are its work space (allocated by the caller: no reference counting in here), y0 (n,) the start.
 
     One function, long, because numba keeps the stepper's state in registers only within a function.
@@ -341,6 +352,7 @@ def _integrate(minv, bvec, axial, rot, mult, params, cm, brk, pcoef, sig, t_out,
     gp = el[2]
     ap = el[3]  # C_s(u_P): antiderivative at the branch start
     wacc = el[4]  # work of the element up to its branch start
+    ms = el[6:13]  # the stops' (_stops_at), from init's rows 4 and 5 (their held peaks); 6: their work at the start
     for e in range(ne):
         # init rows: branch sign, its start u_P, the gap there, the antiderivative there
         s[e] = init[0, e]
@@ -353,10 +365,16 @@ def _integrate(minv, bvec, axial, rot, mult, params, cm, brk, pcoef, sig, t_out,
         else:
             gp[e] = init[2, e]
             ap[e] = init[3, e]
+        if init.shape[0] > 5:
+            ms[0, e] = init[4, e]
+            ms[1, e] = init[5, e]
 
     y = vec[0]
     for i in range(n):
         y[i] = y0[i]
+    if params.shape[1] > STOP_ROW:  # the stops' work is counted from the start, as the elements'
+        for e in range(ne):
+            _, ms[6, e] = stop_force(params, e, _u_el(bvec, axial, rot, e, y, n), ms[0, e], ms[1, e])
     y_new = vec[1]
     y_ev = vec[2]
     ytmp = vec[3]
@@ -378,7 +396,7 @@ def _integrate(minv, bvec, axial, rot, mult, params, cm, brk, pcoef, sig, t_out,
 
     for k in range(n_int):
         tb = brk[k + 1]
-        bad = _rhs(t, y, k, brk, pcoef, sig, minv, bvec, axial, rot, mult, params, cm, s, up, gp, p, f)
+        bad = _rhs(t, y, k, brk, pcoef, sig, minv, bvec, axial, rot, mult, params, cm, s, up, gp, ms, p, f)
         n_fev += 1
         if bad >= 0:
             info[R_STATUS] = ST_OVERFLOW
@@ -390,7 +408,7 @@ def _integrate(minv, bvec, axial, rot, mult, params, cm, brk, pcoef, sig, t_out,
             while io < n_out and t_out[io] <= t:
                 for i in range(ny):
                     yo[i] = y[i]
-                io = _write(io, yo, bvec, axial, rot, mult, params, s, up, gp, ap, wacc, out_y, out_eu, out_ef, out_eh, n)
+                io = _write(io, yo, bvec, axial, rot, mult, params, s, up, gp, ap, wacc, ms, out_y, out_eu, out_ef, out_eh, n)
         while tb - t > 1e-13 * max(1.0, abs(tb)):
             if n_steps + n_rej > max_steps:
                 info[R_STATUS] = ST_TOO_MANY_STEPS
@@ -406,7 +424,7 @@ def _integrate(minv, bvec, axial, rot, mult, params, cm, brk, pcoef, sig, t_out,
             # ---- one DOP853 step
             for i in range(ny):
                 K[0, i] = f[i]
-            bad = _stages(1, 12, t, hh, y, k, brk, pcoef, sig, minv, bvec, axial, rot, mult, params, cm, s, up, gp, p, A, C, K, ytmp)
+            bad = _stages(1, 12, t, hh, y, k, brk, pcoef, sig, minv, bvec, axial, rot, mult, params, cm, s, up, gp, ms, p, A, C, K, ytmp)
             n_fev += 11
             if bad < 0:
                 for i in range(ny):
@@ -414,7 +432,7 @@ def _integrate(minv, bvec, axial, rot, mult, params, cm, brk, pcoef, sig, t_out,
                     for j in range(12):
                         acc += B[j] * K[j, i]
                     y_new[i] = y[i] + hh * acc
-                bad = _rhs(t + hh, y_new, k, brk, pcoef, sig, minv, bvec, axial, rot, mult, params, cm, s, up, gp, p, f_new)
+                bad = _rhs(t + hh, y_new, k, brk, pcoef, sig, minv, bvec, axial, rot, mult, params, cm, s, up, gp, ms, p, f_new)
                 n_fev += 1
             if bad >= 0:
                 # an exponential overflowed inside the step: try a smaller one first
@@ -485,7 +503,7 @@ def _integrate(minv, bvec, axial, rot, mult, params, cm, brk, pcoef, sig, t_out,
             x_ev = 2.0
             if need:
                 _dense_coefficients(t, hh, y, y_new, f, f_new, k, brk, pcoef, sig, minv, bvec, axial, rot, mult, params,
-                                    cm, s, up, gp, p, A, C, D, K, F, ytmp)
+                                    cm, s, up, gp, ms, p, A, C, D, K, F, ytmp)
                 n_fev += 3
                 have_dense = True
                 for e in range(ne):
@@ -551,7 +569,7 @@ def _integrate(minv, bvec, axial, rot, mult, params, cm, brk, pcoef, sig, t_out,
                     if xroot[e] == 0.0:
                         _new_branch(e, y, bvec, axial, rot, params, s, up, gp, ap, wacc, n)
                         n_start += 1
-                bad = _rhs(t, y, k, brk, pcoef, sig, minv, bvec, axial, rot, mult, params, cm, s, up, gp, p, f)
+                bad = _rhs(t, y, k, brk, pcoef, sig, minv, bvec, axial, rot, mult, params, cm, s, up, gp, ms, p, f)
                 n_fev += 1
                 if n_start > 100 * (n_ev + n_steps + 10):
                     info[R_STATUS] = ST_STEP_TOO_SMALL
@@ -565,7 +583,7 @@ def _integrate(minv, bvec, axial, rot, mult, params, cm, brk, pcoef, sig, t_out,
                     x = (t_out[io] - t) / hh
                     for i in range(ny):
                         yo[i] = _dense(F, y, x, i)
-                    io = _write(io, yo, bvec, axial, rot, mult, params, s, up, gp, ap, wacc, out_y, out_eu, out_ef, out_eh, n)
+                    io = _write(io, yo, bvec, axial, rot, mult, params, s, up, gp, ap, wacc, ms, out_y, out_eu, out_ef, out_eh, n)
                 # the state at the reversal from the step's dense output (7th order, within the
                 # step's tolerance: the step was accepted), not from the step redone to it
                 h_ev = t_ev - t
@@ -574,8 +592,9 @@ def _integrate(minv, bvec, axial, rot, mult, params, cm, brk, pcoef, sig, t_out,
                 t = t_ev
                 for i in range(ny):
                     y[i] = y_ev[i]
+                _stops_at(y, bvec, axial, rot, params, ms, n)
                 while io < n_out and t_out[io] <= t:
-                    io = _write(io, y, bvec, axial, rot, mult, params, s, up, gp, ap, wacc, out_y, out_eu, out_ef, out_eh, n)
+                    io = _write(io, y, bvec, axial, rot, mult, params, s, up, gp, ap, wacc, ms, out_y, out_eu, out_ef, out_eh, n)
                 # elements that reverse together (identical b and sets, or by chance within
                 # SIMULTANEOUS of the step) all start their new branches here
                 for e in range(ne):
@@ -583,7 +602,7 @@ def _integrate(minv, bvec, axial, rot, mult, params, cm, brk, pcoef, sig, t_out,
                         _new_branch(e, y, bvec, axial, rot, params, s, up, gp, ap, wacc, n)
                         n_ev += 1
                 n_steps += 1
-                bad = _rhs(t, y, k, brk, pcoef, sig, minv, bvec, axial, rot, mult, params, cm, s, up, gp, p, f)
+                bad = _rhs(t, y, k, brk, pcoef, sig, minv, bvec, axial, rot, mult, params, cm, s, up, gp, ms, p, f)
                 n_fev += 1
                 if h_ev > 0.0:
                     h_min_seen = min(h_min_seen, h_ev)
@@ -592,24 +611,25 @@ def _integrate(minv, bvec, axial, rot, mult, params, cm, brk, pcoef, sig, t_out,
             while io < n_out and t_out[io] < t + hh:
                 if not have_dense:
                     _dense_coefficients(t, hh, y, y_new, f, f_new, k, brk, pcoef, sig, minv, bvec, axial, rot, mult, params,
-                                        cm, s, up, gp, p, A, C, D, K, F, ytmp)
+                                        cm, s, up, gp, ms, p, A, C, D, K, F, ytmp)
                     n_fev += 3
                     have_dense = True
                 x = (t_out[io] - t) / hh
                 for i in range(ny):
                     yo[i] = _dense(F, y, x, i)
-                io = _write(io, yo, bvec, axial, rot, mult, params, s, up, gp, ap, wacc, out_y, out_eu, out_ef, out_eh, n)
+                io = _write(io, yo, bvec, axial, rot, mult, params, s, up, gp, ap, wacc, ms, out_y, out_eu, out_ef, out_eh, n)
             clipped = hh < h
             t = tb if hh == tb - t else t + hh
             for i in range(ny):
                 y[i] = y_new[i]
                 f[i] = f_new[i]
+            _stops_at(y, bvec, axial, rot, params, ms, n)
             n_steps += 1
             h_min_seen = min(h_min_seen, hh)
             h_max_seen = max(h_max_seen, hh)
             h = max(h, hh * factor) if clipped else hh * factor
             while io < n_out and t_out[io] <= t:
-                io = _write(io, y, bvec, axial, rot, mult, params, s, up, gp, ap, wacc, out_y, out_eu, out_ef, out_eh, n)
+                io = _write(io, y, bvec, axial, rot, mult, params, s, up, gp, ap, wacc, ms, out_y, out_eu, out_ef, out_eh, n)
             finite = True
             for i in range(n):
                 finite = finite and math.isfinite(y[i])
@@ -619,7 +639,7 @@ def _integrate(minv, bvec, axial, rot, mult, params, cm, brk, pcoef, sig, t_out,
                 return io
     # outputs left by round-off at the very end
     while io < n_out:
-        io = _write(io, y, bvec, axial, rot, mult, params, s, up, gp, ap, wacc, out_y, out_eu, out_ef, out_eh, n)
+        io = _write(io, y, bvec, axial, rot, mult, params, s, up, gp, ap, wacc, ms, out_y, out_eu, out_ef, out_eh, n)
     info[R_STATUS] = ST_OK
     info[R_STEPS] = n_steps
     info[R_REJECTED] = n_rej
@@ -632,7 +652,7 @@ def _integrate(minv, bvec, axial, rot, mult, params, cm, brk, pcoef, sig, t_out,
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
-def _stages(first, last, t, hh, y, k, brk, pcoef, sig, minv, bvec, axial, rot, mult, params, cm, s, up, gp, p, A, C, K, ytmp):
+def _stages(first, last, t, hh, y, k, brk, pcoef, sig, minv, bvec, axial, rot, mult, params, cm, s, up, gp, ms, p, A, C, K, ytmp):
     """Runge-Kutta stages first..last-1 of a step hh from (t, y) into the rows of K;
     returns the first element whose exponential overflowed, or -1."""
     for st in range(first, last):
@@ -641,17 +661,17 @@ def _stages(first, last, t, hh, y, k, brk, pcoef, sig, minv, bvec, axial, rot, m
             for j in range(st):
                 acc += A[st, j] * K[j, i]
             ytmp[i] = y[i] + hh * acc
-        bad = _rhs(t + C[st] * hh, ytmp, k, brk, pcoef, sig, minv, bvec, axial, rot, mult, params, cm, s, up, gp, p, K[st])
+        bad = _rhs(t + C[st] * hh, ytmp, k, brk, pcoef, sig, minv, bvec, axial, rot, mult, params, cm, s, up, gp, ms, p, K[st])
         if bad >= 0:
             return bad
     return -1
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
-def _dense_coefficients(t, hh, y, y_new, f, f_new, k, brk, pcoef, sig, minv, bvec, axial, rot, mult, params, cm, s, up, gp, p,
+def _dense_coefficients(t, hh, y, y_new, f, f_new, k, brk, pcoef, sig, minv, bvec, axial, rot, mult, params, cm, s, up, gp, ms, p,
                         A, C, D, K, F, ytmp):
     """The three extra stages and the 7 rows of DOP853's dense output (as scipy's DOP853)."""
-    _stages(13, 16, t, hh, y, k, brk, pcoef, sig, minv, bvec, axial, rot, mult, params, cm, s, up, gp, p, A, C, K, ytmp)
+    _stages(13, 16, t, hh, y, k, brk, pcoef, sig, minv, bvec, axial, rot, mult, params, cm, s, up, gp, ms, p, A, C, K, ytmp)
     for i in range(2 * len(minv) + 2):
         dy = y_new[i] - y[i]
         F[0, i] = dy
@@ -680,15 +700,21 @@ def _new_branch(e, y, bvec, axial, rot, params, s, up, gp, ap, wacc, n):
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
-def _write(io, y, bvec, axial, rot, mult, params, s, up, gp, ap, wacc, out_y, out_eu, out_ef, out_eh, n):
+def _write(io, y, bvec, axial, rot, mult, params, s, up, gp, ap, wacc, ms, out_y, out_eu, out_ef, out_eh, n):
     """One output row from the state y on the current branches: the state, each element row's
-    deformation and force, the hysteretic work."""
+    deformation and force (its stop's with it), the hysteretic work (the stops' with it)."""
     eh = 0.0
+    stops = params.shape[1] > STOP_ROW
     for e in range(bvec.shape[0]):
         u = _u_el(bvec, axial, rot, e, y, n)
         fe, big, _ = _force(params, e, s[e], up[e], gp[e], u)
         alpha = params[e, branch_row(s[e]), ALPHA]
         w = wacc[e] + big - ap[e] + s[e] * gp[e] * (math.exp(-s[e] * alpha * (u - up[e])) - 1.0) / alpha
+        if stops:
+            fs, ws = stop_force(params, e, u, ms[0, e], ms[1, e])
+            if fs != 0.0:
+                fe += fs
+            w += ms[2, e] + ws - ms[6, e]
         out_eu[io, e] = u
         out_ef[io, e] = fe
         eh += mult[e] * w
@@ -696,3 +722,32 @@ def _write(io, y, bvec, axial, rot, mult, params, s, up, gp, ap, wacc, out_y, ou
         out_y[io, i] = y[i]
     out_eh[io] = eh
     return io + 1
+
+
+@njit(cache=True, error_model="numpy", _nrt=False)
+def _stops_at(y, bvec, axial, rot, params, ms, n):
+    """The stops at a state the integration reached (a step's end, an event: along each step the
+    deformation is monotonic, its turns being events, so a contact's peak is the larger of the held
+    one and the deformation now). ms (6, ne): each side's held peak (lower, upper), the energy
+    finished contacts lost, contacts begun, the largest force and penetration."""
+    if params.shape[1] <= STOP_ROW:
+        return
+    for e in range(bvec.shape[0]):
+        k = params[e, STOP_ROW, STOP_K]
+        if k == 0.0:
+            continue
+        r = params[e, STOP_ROW, STOP_E]
+        u = _u_el(bvec, axial, rot, e, y, n)
+        fs, _ = stop_force(params, e, u, ms[0, e], ms[1, e])
+        for side in range(2):
+            d = u - params[e, STOP_ROW, STOP_UPPER] if side == 1 else params[e, STOP_ROW, STOP_LOWER] - u
+            m0 = ms[side, e]
+            if d > 0.0:
+                if m0 == 0.0:
+                    ms[3, e] += 1.0
+                ms[side, e] = max(m0, d)
+                ms[5, e] = max(ms[5, e], ms[side, e])
+            elif m0 != 0.0:  # back past the gap: the contact is over, its loss kept
+                ms[2, e] += 0.5 * k * (1.0 - r * r) * m0 * m0
+                ms[side, e] = 0.0
+        ms[4, e] = max(ms[4, e], abs(fs))

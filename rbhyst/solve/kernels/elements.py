@@ -9,8 +9,9 @@ import math
 
 from numba import njit
 
+from rbhyst.model.stop import STOP_ROW, stop_update
 from rbhyst.model.vrm import vrm_update
-from rbhyst.solve.kernels.layout import A, F, FB, G, K, LOCATED, S, SPATIAL, U, UP
+from rbhyst.solve.kernels.layout import A, DL, DU, F, FB, FS, G, IMP, K, LOCATED, NI, PD, PF, S, SPATIAL, U, UP
 from rbhyst.solve.kernels.rotations import element_row, rotation, turned
 
 
@@ -106,11 +107,42 @@ def update_spatial(bvec, axial, mult, params, q0, q, st, cur, kpeak, r, bq):
         st[nxt, e, A] = a
         kpeak[e, 0] = max(kstart, k)
         kpeak[e, 1] = k
+        if params.shape[1] > STOP_ROW:
+            f, w = stop_step(params, e, st, cur, u, f, w, kpeak)
         work += mult[e] * w
         mf = mult[e] * f
         for i in range(n):
             r[i] += mf * bq[e, i]
     return True, -1, work
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def stop_step(params, e, st, cur, u, f, w, kpeak):
+    """Element e's stop (rbhyst.model.stop) over its step from st[cur, e, U] to u, after its VRM's:
+    its state into st[1 - cur], its tangents added to kpeak[e]. Returns the element's force and
+    work with the stop's (as they were, to the bit, where the stop took no part)."""
+    nxt = 1 - cur
+    fs, ml, mu, k_top, k_end, ws, loss, began, engaged = stop_update(params, e, st[cur, e, U], u, st[cur, e, DL],
+                                                                    st[cur, e, DU])
+    st[nxt, e, DL] = ml
+    st[nxt, e, DU] = mu
+    st[nxt, e, FS] = fs
+    st[nxt, e, IMP] = st[cur, e, IMP] + loss
+    st[nxt, e, NI] = st[cur, e, NI] + (1.0 if began else 0.0)
+    st[nxt, e, PF] = max(st[cur, e, PF], abs(fs))
+    st[nxt, e, PD] = max(st[cur, e, PD], max(mu, ml))
+    if not engaged:
+        return f, w
+    kpeak[e, 0] += k_top
+    kpeak[e, 1] += k_end
+    return f + fs, w + ws
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def element_force(st, cur, e):
+    """Element e's force in st[cur]: its VRM's and its stop's (F alone where the stop bears nothing)."""
+    fs = st[cur, e, FS]
+    return st[cur, e, F] + fs if fs != 0.0 else st[cur, e, F]
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
@@ -121,7 +153,7 @@ def start_spatial(bvec, axial, mult, st, cur, q, r, bq):
         r[i] = 0.0
     rm = rotation(q[3], q[4], q[5])
     for e in range(bvec.shape[0]):
-        mf = mult[e] * st[cur, e, 1]
+        mf = mult[e] * element_force(st, cur, e)
         element_row(bvec, axial, e, rm, q, bq)
         for i in range(n):
             r[i] += mf * bq[e, i]
@@ -131,8 +163,10 @@ def start_spatial(bvec, axial, mult, st, cur, q, r, bq):
 def update_elements(bvec, axial, rot, mult, params, q0, q, st, cur, kpeak, r, bq, n):
     """Elements at the new configuration q (n,) (eqs. 5-11): u_e = b_e . q, R = sum mult b f.
 
-    st: (2, ne, 6) element states; st[cur] holds the state at the start of the step
-    (columns U, F, S, G, K, A, see hysteresis.vrm_update), st[1 - cur] receives the new
+    st: (2, ne, layout.N_STATE) element states; st[cur] holds the state at the start of the step
+    (columns U, F, S, G, K, A, see hysteresis.vrm_update; where params has a third row, each
+    element's stop, rbhyst.model.stop: its columns DL .. PD, its force added to the element's
+    and its tangents to kpeak, stop_step), st[1 - cur] receives the new
     state (two buffers used in turn: an accepted step copies nothing); kpeak (ne, 2) receives
     the largest tangent over the step and the tangent at its end; r (n,) the restoring force.
     n = bvec.shape[1], given by the caller: inlined into a kernel where it is a compile-time
@@ -146,6 +180,8 @@ def update_elements(bvec, axial, rot, mult, params, q0, q, st, cur, kpeak, r, bq
     stiffness returned (Newmark's Newton matrix goes without it in space: its iterations
     converge to the same tolerance); rot = SMALL: the seed's rows, bq untouched.
     Returns (ok, bad element, work of all element forces over the step, geometric stiffness).
+    Long, because it is inlined into every method's step: one loop over the elements, whose
+    state numba keeps in registers only within a function.
     """
     if rot == SPATIAL:  # one call, compiled once: the plane's kernels carry none of it inlined
         ok, bad, work = update_spatial(bvec, axial, mult, params, q0, q, st, cur, kpeak, r, bq)
@@ -196,6 +232,8 @@ def update_elements(bvec, axial, rot, mult, params, q0, q, st, cur, kpeak, r, bq
         st[nxt, e, FB] = back
         kpeak[e, 0] = max(kstart, k)
         kpeak[e, 1] = k
+        if params.shape[1] > STOP_ROW:
+            f, w = stop_step(params, e, st, cur, u, f, w, kpeak)
         m = mult[e]
         work += m * w
         mf = m * f
@@ -273,7 +311,7 @@ def start_rows(bvec, axial, rot, mult, st, cur, q, r, bq, n):
         sn = math.sin(q[rot])
         cs = math.cos(q[rot])
     for e in range(bvec.shape[0]):
-        mf = mult[e] * st[cur, e, 1]
+        mf = mult[e] * element_force(st, cur, e)
         for i in range(n):
             if i == rot:
                 r[i] += mf * (bvec[e, i] * cs - axial[e] * sn)

@@ -30,7 +30,11 @@ MODIFIED = {"newmark": 0, "central-difference": 1, "chang": 2}
 U, F, S, G, K, A, UP, FB = range(8)  # UP: the deformation a step before (LOCATED)
 #: FB (LOCATED): where the step turned the element before the node it started from, that node's
 #: force re-driven on the new branch (the turn put before the node, not after it); else NaN
-N_STATE = 8
+#: a stop (rbhyst.model.stop): the peaks of its lower and upper side's current contacts, its force
+#: (the element's is F + FS: F stays the VRM's, which its next step starts from), the energy its
+#: impacts lost, how many contacts began, its largest force and penetration (all 0 without one)
+DL, DU, FS, IMP, NI, PF, PD = range(8, 15)
+N_STATE = 15
 
 #: what kernels.estimate.companion_estimate returns: the companion's estimate alone (at most
 #: ``check``), with the probe's, past ``largest``, or where the adaptive solutions must say it: a

@@ -19,9 +19,9 @@ import math
 from numba import njit
 
 from rbhyst.solve.integrators.steps import KR_ALPHA, NEWMARK, chang_step, kr_alpha_step, newmark_step
-from rbhyst.solve.kernels.layout import (E_HYST, E_IN, E_KIN, E_VISC, F, FB, I_BRANCH, I_DISP, I_ELEMENT, I_OMEGA, I_STATUS, I_STIFFNESS, I_TIME, LOCATED, NEWTON_FAILED, NONFINITE, NOT_CONVERGED, OK, OVERFLOW, S, SPATIAL, U, UNRESOLVED, W_A, W_AN, W_D, W_DN, W_PA, W_PB, W_Q, W_SA, W_SD, W_SV, W_V, W_VN, W_X, W_Z, X_CUR, X_E_HYST, X_E_IN, X_E_VISC, X_ITER, X_LEVEL, X_LEVEL_USED, X_OMEGA_DT2, X_Q, X_STEPS, X_SUBSTEPS)
-from rbhyst.solve.kernels.elements import (copy_rows, copy_vector, omega_squared, omega_squared_exact, row_dot,
-                                           turned_dampers)
+from rbhyst.solve.kernels.layout import (E_HYST, E_IN, E_KIN, E_VISC, FB, FS, I_BRANCH, I_DISP, I_ELEMENT, I_OMEGA, I_STATUS, I_STIFFNESS, I_TIME, LOCATED, NEWTON_FAILED, NONFINITE, NOT_CONVERGED, OK, OVERFLOW, S, SPATIAL, U, UNRESOLVED, W_A, W_AN, W_D, W_DN, W_PA, W_PB, W_Q, W_SA, W_SD, W_SV, W_V, W_VN, W_X, W_Z, X_CUR, X_E_HYST, X_E_IN, X_E_VISC, X_ITER, X_LEVEL, X_LEVEL_USED, X_OMEGA_DT2, X_Q, X_STEPS, X_SUBSTEPS)
+from rbhyst.solve.kernels.elements import (copy_rows, copy_vector, element_force, omega_squared, omega_squared_exact,
+                                           row_dot, turned_dampers)
 from rbhyst.solve.kernels.rotations import compose
 
 
@@ -30,6 +30,13 @@ def _fail(info, status, element, t):
     info[I_STATUS] = status
     info[I_ELEMENT] = element
     info[I_TIME] = t
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def element_force_with(f, st, c, e):
+    """The VRM force f of element e with its stop's in st[c] (f itself where the stop bears nothing)."""
+    fs = st[c, e, FS]
+    return f + fs if fs != 0.0 else f
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
@@ -44,7 +51,8 @@ def run_chunk(method, coef, mass, minv, cm, damped, bvec, axial, rot, mult, para
     kinematics, bq (ne, n) work space for the rows b_e(q) (rbhyst.solve.kernels.elements.update_elements).
     load: (n_steps * nsub_c + 1, n) generalized load on the compute grid from the chunk's
     start time t0. Row k of out_* receives the state after output step k + 1. out_e columns:
-    input energy, kinetic energy, hysteretic work, viscous work (cumulative).
+    input energy, kinetic energy, hysteretic work (the elements' forces', their stops' with them), viscous
+    work (cumulative).
     w (layout.N_W, n) and wm (n, n): work space.
     Every compute step is split into at least 2**min_level substeps (a structure-dependent
     method needs omega_0 h within the limit too, see simulate.min_level). A step whose Newton
@@ -209,12 +217,13 @@ def run_chunk(method, coef, mass, minv, cm, damped, bvec, axial, rot, mult, para
                 out_v[row, i] = v[i]
             for e in range(ne):
                 out_u[row, e] = st[cur, e, U]
-                out_f[row, e] = st[cur, e, F]
+                out_f[row, e] = element_force(st, cur, e)
             if rot == LOCATED and nsub_c == 1 and level == 0:
                 # (a step split into substeps located its turns between them, not at the rows)
                 for e in range(ne):
                     back = st[cur, e, FB]
                     if not math.isnan(back):
+                        back = element_force_with(back, st, 1 - cur, e)  # (the row before's stop)
                         if row > 0:
                             out_f[row - 1, e] = back
                         else:
