@@ -10,7 +10,7 @@ compiled loop's seconds: every pass's RunStats.wall_s), rows (the stepping's Pyt
 chunks' tables and reductions, plan.run less the loop), estimate (the error estimate, its
 companion's kernels included, and the companion stepped alongside the run), kinematics (the small rotations' neglected terms), checks
 (diagnose, warnings) and the rest (the case's dict, the choice's bookkeeping). ``--cprofile N``
-prints the N functions of most own time as well.
+prints the N functions of most own time as well; ``--fixed`` takes 0.2's settings (chang at dt).
 """
 
 from __future__ import annotations
@@ -54,13 +54,13 @@ class Phases:
         self.s[out_of] -= seconds
 
 
-def sweep_text(n: int, records: Path, levels: int = 5) -> str:
+def sweep_text(n: int, records: Path, levels: int = 5, deck: Path = DECK) -> str:
     """A sweep of about ``n`` cases of the seed deck: 8 s of El Centro at ``levels`` scale
     factors (0.5 to 1.5) times n / levels values of body.mass (each case computed, none reused)."""
     per = max(1, n // levels)
     factors = ", ".join(repr(round(0.5 + k / max(1, levels - 1), 6)) for k in range(levels))
     masses = ", ".join(repr(800.0 + 0.01 * k) for k in range(per))
-    return (f'deck = "{DECK.as_posix()}"\n\n[[motions]]\nname = "elc"\n'
+    return (f'deck = "{deck.as_posix()}"\n\n[[motions]]\nname = "elc"\n'
             f'x1 = {{ file = "{(records / "I-ELC270.AT2").as_posix()}", units = "g" }}\n'
             f'x2 = {{ file = "{(records / "I-ELC180.AT2").as_posix()}", units = "g" }}\n\n'
             f'[scale]\nfactors = [{factors}]\n\n'
@@ -100,16 +100,22 @@ def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--cases", type=int, default=200)
     ap.add_argument("--records", type=Path, default=RECORDS)
+    ap.add_argument("--fixed", action="store_true", help='the deck at 0.2\'s settings: integrator = "chang" at dt')
     ap.add_argument("--cprofile", type=int, default=0, help="also print the N functions of most own time")
     args = ap.parse_args()
+    import shutil
     import tempfile
 
     from rbhyst.analyses.sweep import worker
     from rbhyst.sweep import load_sweep
 
     with tempfile.TemporaryDirectory() as tmp:
-        path = Path(tmp) / "profile.toml"
-        path.write_text(sweep_text(args.cases, args.records))
+        path, deck = Path(tmp) / "profile.toml", DECK
+        if args.fixed:
+            deck = Path(tmp) / "seed_fixed.toml"
+            deck.write_text(DECK.read_text().replace('# integrator = "chang"', 'integrator = "chang"'))
+            shutil.copytree(DECK.parent / "records", Path(tmp) / "records")
+        path.write_text(sweep_text(args.cases, args.records, deck=deck))
         sw = load_sweep(path)
     base, todo = sw.base, [(c.key, c.values) for c in sw.cases]
     worker.run_batch(base, todo[:3])  # kernels loaded, records read
