@@ -318,3 +318,43 @@ def test_every_method_keeps_its_order_with_viscous_dampers(tmp_path, integrator)
         errs.append(np.max(np.abs(res.d[:, 2] - ref.d[:, 2])) / np.max(np.abs(ref.d[:, 2])))
     order = math.log(errs[0] / errs[-1]) / math.log(dts[0] / dts[-1])
     assert order == pytest.approx(2.0, abs=0.2), errs
+
+
+def test_the_resultant_s_neglected_forces_are_the_elements_summed(tmp_path, monkeypatch):
+    """The small rotations' check of the forces' resultant (model_residual) sums the elements'
+    neglected forces per row without an array of them: against each element's neglected
+    deformation b3 (sin theta - theta) + c (cos theta - 1) times its reversal stiffness along
+    its direction, summed over the elements here, at every compared row (the series summed
+    smallest first where numpy's sin(theta) - theta would lose the digits)."""
+    from rbhyst.model.system import axial_offset
+    from rbhyst.results.analysis import analyse
+    from rbhyst.solve import kinematic
+    from rbhyst.solve.history import estimate_columns
+
+    data = deck("small", moment=0.0, force=2.0e3)
+    data["excitation"]["force"].pop("m3")
+    seen = []
+    real = kinematic.resultant_share
+    monkeypatch.setattr(kinematic, "resultant_share", lambda dr, *a: seen.append(np.array(dr)) or real(dr, *a))
+    res = analyse(*scene(data, tmp_path), keep=True)
+    assert len(seen) == 1
+    system = res.system
+    columns = [k for k, _, _ in estimate_columns(res.layout)]
+    start = float(system.static.q[2]) if system.static is not None else 0.0
+    theta = start + res.compared[:, 1 + columns.index(system.coordinates[2].key("d"))]
+    assert 1e-3 < np.max(np.abs(theta)) < 0.25
+    want = np.zeros(2)
+    elements = [el for el in system.elements for _ in range(el.count)]
+    k_rev = system.expand(system.k_reversal[None, :])[0]
+    for th in theta:
+        s = sum(reversed([(-1) ** k * th ** (2 * k + 1) / math.factorial(2 * k + 1) for k in range(1, 8)]))
+        m = sum(reversed([(-1) ** k * th ** (2 * k) / math.factorial(2 * k) for k in range(1, 8)]))
+        force = np.zeros(2)
+        for el, k in zip(elements, k_rev):
+            a = math.radians(el.angle_deg)
+            b3 = el.x[0] * math.sin(a) - el.x[1] * math.cos(a)  # (its row b_e's rotation term)
+            du = b3 * s + axial_offset(el.x[0], el.x[1], a) * m
+            force += du * k * np.array([math.cos(a), math.sin(a)])
+        want = np.maximum(want, np.abs(force))
+    assert np.allclose(seen[0], want, rtol=1e-12, atol=1e-12 * np.max(want)), (seen[0], want)
+    assert np.max(want) > 0

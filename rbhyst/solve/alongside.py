@@ -224,10 +224,13 @@ class Follower:
             if kernel("redrive_on")(self.plan.params, self._state, u, f, final) >= 0:
                 self.out_of_range = True
         first = -(-c // self.every) * self.every
-        picked = np.arange(first, min(last, self.last_compared) + 1, self.every)
-        if not len(picked):
+        end = min(last, self.last_compared) + 1
+        if end <= first:
             return
-        mine, theirs = picked - self.lo, picked - nodes.base
+        # (slices, not index arrays: views of the rows, no copies gathered)
+        assert first >= max(self.lo, nodes.base), "a compared node before the rows held"
+        mine = slice(first - self.lo, end - self.lo, self.every)
+        theirs = slice(first - nodes.base, end - nodes.base, self.every)
         dd = nodes.d[theirs] - self.d[mine]
         v_run = nodes.v[theirs] - nodes.offset[theirs] if self.located else nodes.v[theirs]
         dv = v_run - self.v[mine]

@@ -201,13 +201,17 @@ def model_residual(result, start: float) -> tuple[float, str]:
     if top > 0 and dr / top > best:
         best, where = float(dr / top), key
     # the forces' resultant: where the elements' first-order deformations cancel in it (a body
-    # rocking on mounts either side of G), the second-order ones they neglect do not
+    # rocking on mounts either side of G), the second-order ones they neglect do not. Each
+    # element's neglected force (b3 s + c m) k_rev along its direction, summed: s A + m B at
+    # every row, A and B the elements' sums (k_rev: the stiffest tangent, the reversal's, as a
+    # mount cycling about a point is that stiff), without a (rows, elements) array
     angles = np.radians([el.angle_deg for el in system.elements for _ in range(el.count)])
-    du_t = b3[None, :] * (np.sin(theta) - theta)[:, None] + c[None, :] * (np.cos(theta) - 1.0)[:, None]
-    # (at the stiffest tangent, the reversal's: a mount cycling about a point is that stiff)
+    directions = np.column_stack([np.cos(angles), np.sin(angles)])
     k_rev = system.expand(system.k_reversal[None, :])[0]
-    share_r, key_r = resultant_share(du_t * k_rev[None, :], np.column_stack([np.cos(angles), np.sin(angles)]),
-                                     rows, columns, system)
+    s, m = small_angle_terms(theta)
+    a, b = (b3 * k_rev) @ directions, (c * k_rev) @ directions
+    dr = np.array([float(np.max(np.abs(s * a[d] + m * b[d]))) if len(theta) else 0.0 for d in range(2)])
+    share_r, key_r = resultant_share(dr, rows, columns, system)
     if share_r > best:
         best, where = share_r, key_r
     for name, x in layout.points:
@@ -253,7 +257,9 @@ def model_residual_space(result, start: np.ndarray) -> tuple[float, str]:
     # the forces' resultant, as in the plane: the second-order deformations at the reversal's
     # stiffness, summed
     k_rev = system.expand(system.k_reversal[None, :])[0]
-    share_r, key_r = resultant_share(du * k_rev[None, :], ds, rows, columns, system)
+    df = du * k_rev[None, :]
+    share_r, key_r = resultant_share(np.abs(df @ ds).max(axis=0) if df.size else np.zeros(3), rows, columns,
+                                     system)
     if share_r > best:
         best, where = share_r, key_r
     # the moment about G of the forces at their turned points, beyond the small rotations' share
@@ -273,25 +279,41 @@ def model_residual_space(result, start: np.ndarray) -> tuple[float, str]:
     return best, where
 
 
-def resultant_share(df: np.ndarray, directions: np.ndarray, rows: np.ndarray, columns: dict,
-                    system) -> tuple[float, str]:
+def resultant_share(dr: np.ndarray, rows: np.ndarray, columns: dict, system) -> tuple[float, str]:
     """(share, key): the largest of the translational resultant's columns (R1, R2, and R3 in
-    space) that the neglected forces ``df`` (k, elements: each element's neglected deformation
-    times its stiffest tangent) along their ``directions`` (elements, 2 or 3: deck axes) reach, against the
-    column's error scale (estimate.error_scales: its peak, or its family's where it is small)."""
+    space) that the neglected forces reach, ``dr`` the largest along each deck axis (the
+    elements' neglected deformations times their stiffest tangent, along their directions,
+    summed), against the column's error scale (estimate.error_scales: its peak, or its
+    family's where it is small)."""
     from rbhyst.solve.estimate import error_scales
 
     moving = [c for c in system.coordinates if not c.rotation]
-    keys = [c.key("R") for c in moving][:directions.shape[1]]
-    if not keys or df.size == 0:
+    keys = [c.key("R") for c in moving][:len(dr)]
+    if not keys or len(rows) == 0:
         return 0.0, ""
-    dr = np.abs(df @ directions[:, :len(keys)]).max(axis=0)
+    dr = np.asarray(dr[:len(keys)], dtype=float)
     peaks = np.array([float(np.max(np.abs(rows[:, columns[k]]))) for k in keys])
     scales = error_scales(peaks, keys, ["R"] * len(keys), system)
     with np.errstate(divide="ignore", invalid="ignore"):
         share = np.where(scales > 0, dr / scales, 0.0)
     j = int(np.argmax(share))
     return float(share[j]), keys[j]
+
+
+def small_angle_terms(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(sin(theta) - theta, cos(theta) - 1) at every theta, by their series where |theta| <= 0.25
+    as the compiled pass takes them (kernels.reduce.neglected_terms): in floating point
+    sin(theta) - theta loses the digits of theta (half of them at 1e-4 rad)."""
+    q = theta * theta
+    s = -theta * q * (1.0 / 6.0) * (1.0 - q * (1.0 / 20.0) * (1.0 - q * (1.0 / 42.0) * (
+        1.0 - q * (1.0 / 72.0) * (1.0 - q * (1.0 / 110.0) * (1.0 - q * (1.0 / 156.0))))))
+    m = -q * 0.5 * (1.0 - q * (1.0 / 12.0) * (1.0 - q * (1.0 / 30.0) * (1.0 - q * (1.0 / 56.0) * (
+        1.0 - q * (1.0 / 90.0) * (1.0 - q * (1.0 / 132.0))))))
+    large = q > 0.0625
+    if large.any():
+        s[large] = np.sin(theta[large]) - theta[large]
+        m[large] = np.cos(theta[large]) - 1.0
+    return s, m
 
 
 #: a rotation below this (rad) is rounding (a nanometre at a metre): small and exact kinematics
