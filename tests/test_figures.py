@@ -350,3 +350,23 @@ def test_ida_tells_its_combinations_within_the_figure(tmp_path, n_values):
         if t.get_visible() and t.get_text().strip():
             e = t.get_window_extent(r)
             assert box.x0 - 1 <= e.x0 and e.x1 <= box.x1 + 1 and box.y0 - 1 <= e.y0 and e.y1 <= box.y1 + 1, t.get_text()
+
+
+def test_an_mss_isolator_is_drawn_by_its_shear_lines(tmp_path):
+    """element_loops.png draws an isolator with coupled shear by its two shear lines (their columns'
+    resultant against deformation), not by its n springs: the box's 4 isolators x (axial + 8
+    springs) = 36 elements make 4 x 3 panels."""
+    from conftest import write_deck
+    from test_mss import _box
+
+    import rbhyst
+    from rbhyst.report.run import loop_panels, plot_element_loops
+
+    res = rbhyst.run(write_deck(tmp_path, _box("mss", 30.0)), estimate=False)
+    panels = loop_panels(res)
+    assert len(res.system.elements) == 36 and len(panels) == 12
+    shear = [p for p in panels if " shear " in p[0]]
+    assert [p[1] for p in shear[:2]] == ["iso1_shear1_u_m", "iso1_shear2_u_m"]
+    fig = plot_element_loops(res, tmp_path / "loops.png")
+    assert len([ax for ax in fig.axes if ax.get_visible()]) == 12
+    assert overlapping_titles(fig) == []

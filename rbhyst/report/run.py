@@ -291,46 +291,73 @@ def plot_point(result: Result, name: str, path: Path):
     return fig
 
 
+def loop_panels(result: Result) -> list[tuple[str, str, str, tuple | None, tuple | None]]:
+    """What element_loops.png draws, a panel each: (title, deformation column, force column,
+    stroke, stop) of each distinct element, the first of its ``count``; an isolator whose shear is
+    a multiple shear spring (coupling = "mss") by its two shear lines (their deformation and the
+    resultant along each), not by its n springs."""
+    system = result.system
+    panels, k, seen = [], 0, set()
+    for el in system.elements:
+        if el.role is not None and el.role.startswith("mss"):
+            if el.isolator not in seen:
+                seen.add(el.isolator)
+                springs = sum(1 for e in system.elements if e.isolator == el.isolator and e.role.startswith("mss"))
+                for j in (1, 2):
+                    panels.append((f"iso{el.isolator} shear {j}: {el.hysteresis.split(' (')[0]} (mss {springs})",
+                                   f"iso{el.isolator}_shear{j}_u_m",
+                                   f"iso{el.isolator}_shear{j}_f_N", None, None))
+            k += el.count
+            continue
+        label = f"e{k + 1}" if el.count == 1 else f"e{k + 1}-e{k + el.count} (each)"
+        line = f"{el.angle_deg:g}°" if el.direction is None else el.line
+        panels.append((f"{label}: {el.hysteresis}, {line}", f"e{k + 1}_u_m", f"e{k + 1}_f_N", el.stroke,
+                       None if el.stop is None else el.stop[:2]))
+        k += el.count
+    return panels
+
+
 @styled
 def plot_element_loops(result: Result, path: Path):
-    """Force against deformation of each distinct element (seed Fig. 4 style), the stroke
-    limits dashed with a legend. Returns the figure (saved to ``path``)."""
-    system = result.system
+    """Force against deformation of each distinct element (seed Fig. 4 style; an MSS isolator by
+    its two shear lines: loop_panels), the stroke limits dashed and a stop's gaps dotted, each in
+    a legend. Returns the figure (saved to ``path``)."""
     sample = result.plot.sample
-    n = len(system.elements)
-    # the page's width in two columns up to four elements, three beyond (their rows must fit a page too)
+    panels = loop_panels(result)
+    n = len(panels)
+    # the page's width in two columns up to four panels, three beyond (their rows must fit a page too)
     cols = min(n, 2 if n <= 4 else 3)
     rows = math.ceil(n / cols)
     fig, axes = subplots(rows, cols, figsize=(PRINT_WIDTH * cols / (2 if n <= 4 else 3), (3.0 if n <= 4 else 2.6) * rows),
                          squeeze=False)
-    first = np.cumsum([0] + [el.count for el in system.elements])[:-1]
-    peak_f = [result.extremes.peak(f"e{k + 1}_f_N") for k in first]
+    peak_f = [result.extremes.peak(f_col) for _, _, f_col, _, _ in panels]
     top = max(peak_f, default=0.0)
-    k = 0
-    for i, el in enumerate(system.elements):
+    for i, (title, u_col, f_col, stroke, stop) in enumerate(panels):
         ax = axes.flat[i]
-        label = f"e{k + 1}" if el.count == 1 else f"e{k + 1}-e{k + el.count} (each)"
-        line = f"{el.angle_deg:g}°" if el.direction is None else el.line
-        ax.set_title(f"{label}: {el.hysteresis}, {line}", fontsize=8)
+        ax.set_title(title, fontsize=8, wrap=True)
         if peak_f[i] < NEGLIGIBLE * top:  # a panel of rounding noise would look like a loop
             at_rest(ax, f"at rest: |f| at most {peak_f[i]:.1e} N,\nbelow 1e-9 of the largest: rounding")
-            k += el.count
             continue
-        u = sample[:, result.columns.index(f"e{k + 1}_u_m")]
-        f = sample[:, result.columns.index(f"e{k + 1}_f_N")]
+        u = sample[:, result.columns.index(u_col)]
+        f = sample[:, result.columns.index(f_col)]
         ax.plot(u * 1e3, f * 1e-3, lw=0.7)
-        view = loop_view(float(u.min()) * 1e3, float(u.max()) * 1e3, el.stroke)
+        view = loop_view(float(u.min()) * 1e3, float(u.max()) * 1e3, stroke)
         ax.set_xlim(*view)
-        if el.stroke is not None:  # the stroke it can take: drawn where it is in view, said in the legend
-            lo, hi = el.stroke
-            shown = [x * 1e3 for x in el.stroke if view[0] <= x * 1e3 <= view[1]]
-            said = f"stroke limits {plain_number(lo * 1e3)}, +{plain_number(hi * 1e3)} mm"
-            if len(shown) < 2:
+        limits = [(stroke, "stroke limits", "C3", "--"), (stop, "stop gaps", "C2", ":")]
+        for where, name, colour, style in limits:
+            if where is None:
+                continue
+            lo, hi = where  # the deformation it can take, or where it bears on its stop: drawn where in view
+            finite = [x * 1e3 for x in where if math.isfinite(x)]
+            shown = [x for x in finite if view[0] <= x <= view[1]]
+            said = f"{name} " + ", ".join(f"{'+' if x > 0 else ''}{plain_number(x)}" for x in finite) + " mm"
+            if len(shown) < len(finite):
                 said += ",\nbeyond the axis" if not shown else ",\none beyond the axis"
             for j, x in enumerate(shown):
-                ax.axvline(x, color="C3", lw=0.9, ls="--", label=said if j == 0 else None)
+                ax.axvline(x, color=colour, lw=0.9, ls=style, label=said if j == 0 else None)
             if not shown:  # (the legend's entry without a line in view)
-                ax.plot([], [], color="C3", lw=0.9, ls="--", label=said)
+                ax.plot([], [], color=colour, lw=0.9, ls=style, label=said)
+        if stroke is not None or stop is not None:
             ax.legend(fontsize=8, loc="best", framealpha=0.9)
         ax.set_xlabel("u [mm]")
         ax.set_ylabel("f [kN]")
@@ -338,7 +365,6 @@ def plot_element_loops(result: Result, path: Path):
         # in a panel this narrow
         ax.xaxis.set_major_locator(MaxNLocator(nbins=4, steps=[1, 2, 2.5, 5, 10], min_n_ticks=3))
         ax.yaxis.set_major_locator(MaxNLocator(nbins=6, steps=[1, 2, 2.5, 5, 10]))
-        k += el.count
     for ax in axes.flat[n:]:
         ax.set_visible(False)
     save(fig, path)
