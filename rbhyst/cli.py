@@ -610,6 +610,7 @@ def sweep(
     from rbhyst.solve.kernels import compiled as kernels
     from rbhyst.sweep import SweepIncomplete, load_sweep, run_sweep
 
+    began = time.perf_counter()  # the command's own time, the tables and figures included
     with user_errors():
         sw = load_sweep(sweep_file)
         target = out if out is not None else sw.default_out()
@@ -676,10 +677,10 @@ def sweep(
 
             write_report(target)
     failed = outcome.failed
-    took = outcome.t_end - outcome.t_start
+    took = time.perf_counter() - began
     say(f"{outcome.ok} ok, {failed} failed; computed {outcome.computed}"
         + (f" on {outcome.where}" if outcome.computed else "")
-        + f", {outcome.reused} already in the folder; {took:.3g} s")
+        + f", {outcome.reused} already in the folder; {took:.3g} s in all")
     if failed:
         header, rows = outcome.table()
         i_status, i_msg = header.index("status"), header.index("message")
