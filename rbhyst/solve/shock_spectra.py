@@ -2,7 +2,7 @@
 
 Each oscillator of natural frequency f (omega = 2 pi f) and damping ratio zeta (Q = 1 / (2 zeta))
 is driven at its base by the acceleration a(t), sampled at a uniform dt and linear between
-samples, and stepped by the exact recurrence of rbhyst.solve.spectra (Nigam and Jennings 1969),
+samples, and stepped by the exact recurrence and kernel of rbhyst.solve.spectra (Nigam and Jennings 1969),
 with the same substeps and the same peaks between points (Hermite cubic through values and
 slopes), so that the spectrum is exact to the piecewise-linear signal up to the peaks' O(h^4).
 For every oscillator the absolute acceleration x'' + a = -(2 zeta omega x' + omega^2 x) is
@@ -25,11 +25,10 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
 
 from rbhyst.errors import InputError
 from rbhyst.model.periods import octave_frequencies  # noqa: F401 (re-exported beside the spectra it grids)
-from rbhyst.solve.spectra import _turning_value, step_coefficients, substep_counts
+from rbhyst.solve.spectra import _advance, step_coefficients, substep_counts
 
 #: the columns of srs.csv, one row per damping and frequency
 SRS_COLUMNS = ("q", "damping", "frequency_hz", "maximax_m_s2", "positive_m_s2", "negative_m_s2",
@@ -158,10 +157,11 @@ class ShockAccumulator:
         self._zeta = np.tile(z, len(f))
         self._steps: dict[float, tuple[np.ndarray, np.ndarray]] = {}
         n = len(self._omega)
-        # per signal: x, x', the running largest and least absolute acceleration, max |x|
-        self._state = np.zeros((self.n_signals, 5, n))
+        # per signal and oscillator: x, x', max |x|, and the largest y = 2 zeta omega x' + omega^2 x
+        # and -y (the absolute acceleration is -y: its negative and positive peaks)
+        self._x, self._v, self._sd, self._up, self._down = (np.zeros((self.n_signals, n)) for _ in range(5))
         self._last = np.zeros(self.n_signals)
-        self._primary: np.ndarray | None = None  # (signals, 2, n): positive, negative, once ended
+        self._primary: tuple[np.ndarray, np.ndarray] | None = None  # positive, negative, once ended
         self.samples = 0
 
     def _step(self, h: float) -> tuple[np.ndarray, np.ndarray]:
@@ -192,7 +192,7 @@ class ShockAccumulator:
             self._last[:] = a[0]
             start = 1  # the first sample starts the motion from rest
         coef, groups = self._step(self.dt if h is None else float(h))
-        _shock_advance(a, start, self._last, coef, groups, self._state)
+        _advance(a, start, self._last, coef, groups, self._x, self._v, self._sd, self._up, self._down)
         self._last[:] = a[-1]
         self.samples += a.shape[0]
 
@@ -218,80 +218,21 @@ class ShockAccumulator:
         start from the absolute acceleration here (the free vibration starts from this state)."""
         if self._primary is not None:
             return
-        st = self._state
-        self._primary = np.stack([st[:, 2].copy(), 0.0 - st[:, 3]], axis=1)  # (not -0.0 where it never went below)
-        end = -(2.0 * self._zeta * self._omega * st[:, 1] + self._omega * self._omega * st[:, 0])
-        st[:, 2] = np.maximum(end, 0.0)
-        st[:, 3] = np.minimum(end, 0.0)
+        self._primary = (self._down.copy(), self._up.copy())
+        y = 2.0 * self._zeta * self._omega * self._v + self._omega * self._omega * self._x
+        self._down[:] = np.maximum(-y, 0.0)
+        self._up[:] = np.maximum(y, 0.0)
 
     def result(self) -> list[ShockSpectrum]:
         """One ShockSpectrum a signal; the residual is NaN where the excitation has not ended."""
         shape = (len(self.frequencies_hz), len(self.dampings))
         out = []
         for s in range(self.n_signals):
-            st = self._state[s]
             if self._primary is None:
-                pp, pn = st[2], 0.0 - st[3]
-                rp = rn = np.full(st.shape[1], np.nan)
+                pp, pn = self._down[s], self._up[s]
+                rp = rn = np.full(len(self._omega), np.nan)
             else:
-                (pp, pn), rp, rn = self._primary[s], st[2], 0.0 - st[3]
+                pp, pn, rp, rn = self._primary[0][s], self._primary[1][s], self._down[s], self._up[s]
             out.append(ShockSpectrum(self.frequencies_hz.copy(), self.dampings.copy(), self.dt, self.samples,
-                                     *(np.array(v).reshape(shape) for v in (pp, pn, rp, rn, st[4]))))
+                                     *(np.array(v).reshape(shape) for v in (pp, pn, rp, rn, self._sd[s]))))
         return out
-
-
-@njit(cache=True, error_model="numpy")
-def _shock_advance(acc, start, last, coef, groups, state):
-    """Every oscillator (column o of coef) for every signal s over acc[start:, s], from last[s]:
-    state[s] = x, x', the largest and least absolute acceleration, max |x| (in place). groups[g]
-    = (first, end, m): oscillators first..end-1 take m substeps a step, the innermost loop over
-    them (independent of each other: the compiler vectorises it, each oscillator's arithmetic the
-    same whatever the grouping). The absolute acceleration is -(2 zeta omega x' + omega^2 x), its
-    peaks between the points on the Hermite cubic through values and slopes (_turning_value)."""
-    n = acc.shape[0]
-    for g in range(groups.shape[0]):
-        lo = groups[g, 0]
-        hi = groups[g, 1]
-        m = groups[g, 2]
-        a11 = coef[0, lo:hi]
-        a12 = coef[1, lo:hi]
-        a21 = coef[2, lo:hi]
-        a22 = coef[3, lo:hi]
-        b11 = coef[4, lo:hi]
-        b12 = coef[5, lo:hi]
-        b21 = coef[6, lo:hi]
-        b22 = coef[7, lo:hi]
-        cv = coef[8, lo:hi]
-        cx = coef[9, lo:hi]
-        hs = coef[10, lo:hi]
-        for s in range(acc.shape[1]):
-            xs = state[s, 0, lo:hi]
-            vs = state[s, 1, lo:hi]
-            his = state[s, 2, lo:hi]
-            los = state[s, 3, lo:hi]
-            sds = state[s, 4, lo:hi]
-            a0 = last[s]
-            for i in range(start, n):
-                a1 = acc[i, s]
-                da = (a1 - a0) / m
-                p0 = a0
-                for k in range(1, m + 1):
-                    p1 = a0 + k * da if k < m else a1
-                    for o in range(hi - lo):
-                        x = xs[o]
-                        v = vs[o]
-                        xn = (a11[o] * x + a12[o] * v) + (b11[o] * p0 + b12[o] * p1)
-                        vn = (a21[o] * x + a22[o] * v) + (b21[o] * p0 + b22[o] * p1)
-                        # the absolute acceleration is -(cv x' + cx x); its slope from x'' = -(a + y)
-                        yo = -(cv[o] * v + cx[o] * x)
-                        yn = -(cv[o] * vn + cx[o] * xn)
-                        go = -(cx[o] * v - cv[o] * (p0 - yo))
-                        gn = -(cx[o] * vn - cv[o] * (p1 - yn))
-                        turn = _turning_value(yo, yn, go, gn, hs[o])
-                        his[o] = max(his[o], turn, yn)
-                        los[o] = min(los[o], turn, yn)
-                        sds[o] = max(sds[o], abs(_turning_value(x, xn, v, vn, hs[o])), abs(xn))
-                        xs[o] = xn
-                        vs[o] = vn
-                    p0 = p1
-                a0 = a1

@@ -196,7 +196,8 @@ class SpectrumAccumulator:
         self._x = np.zeros((self.n_signals, n))
         self._v = np.zeros((self.n_signals, n))
         self._sd = np.zeros((self.n_signals, n))
-        self._sa = np.zeros((self.n_signals, n))
+        self._up = np.zeros((self.n_signals, n))
+        self._down = np.zeros((self.n_signals, n))
         self._last = np.zeros(self.n_signals)
         self.samples = 0
 
@@ -239,7 +240,7 @@ class SpectrumAccumulator:
         else:
             start = 0
         coef, groups = self._step(self.dt if h is None else float(h))
-        _advance(a, start, self._last, coef, groups, self._x, self._v, self._sd, self._sa)
+        _advance(a, start, self._last, coef, groups, self._x, self._v, self._sd, self._up, self._down)
         self._last[:] = a[-1]
         self.samples += a.shape[0]
 
@@ -256,7 +257,8 @@ class SpectrumAccumulator:
         """Start the peaks afresh from here, the oscillators keeping their motion: the
         spectrum of a window of the history (after a transient, say)."""
         self._sd[:] = 0.0
-        self._sa[:] = 0.0
+        self._up[:] = 0.0
+        self._down[:] = 0.0
 
     def result(self) -> Spectrum:
         """The spectrum of the samples seen so far (copies: updating later does not change it)."""
@@ -268,7 +270,8 @@ class SpectrumAccumulator:
             return np.ascontiguousarray(out.reshape(shape).transpose(1, 2, 0))
 
         return Spectrum(periods=self.periods.copy(), dampings=self.dampings.copy(), dt=self.dt,
-                        samples=self.samples, sd=unordered(self._sd), sa=unordered(self._sa))
+                        samples=self.samples, sd=unordered(self._sd),
+                        sa=unordered(np.maximum(self._up, self._down)))
 
 
 def response_spectrum(acc, dt: float, periods=None, dampings=(0.05,), points_per_period: int = 20) -> Spectrum:
@@ -330,11 +333,13 @@ def _turning_value(f0, f1, d0, d1, h):
 
 
 @njit(cache=True, error_model="numpy")
-def _advance(acc, start, last, coef, groups, x, v, sd, sa):
+def _advance(acc, start, last, coef, groups, x, v, sd, up, down):
     """Step every oscillator (column of coef) for every signal (column of acc) over acc[start:].
 
-    last[s]: the sample before acc[start] of signal s; x, v, sd, sa: (signals, oscillators)
-    state and running peaks, updated in place. groups[g] = (first, end, m): oscillators
+    last[s]: the sample before acc[start] of signal s; x, v, sd, up, down: (signals, oscillators)
+    state and running peaks, updated in place: max |x|, and the largest y = 2 zeta omega x' +
+    omega^2 x (the absolute acceleration's negative peak, as a magnitude) and the largest -y (its
+    positive peak): max(up, down) is sa, and the shock spectra keep the two apart. groups[g] = (first, end, m): oscillators
     first..end-1 take m substeps per step, the input interpolated linearly inside the step with
     the same arithmetic whatever the chunking. Between two evaluation points x and the absolute
     acceleration are smooth and their values and slopes at both points are known exactly (the
@@ -365,7 +370,8 @@ def _advance(acc, start, last, coef, groups, x, v, sd, sa):
             xs = x[s, lo:hi]
             vs = v[s, lo:hi]
             ds = sd[s, lo:hi]
-            fs = sa[s, lo:hi]
+            us = up[s, lo:hi]
+            ws = down[s, lo:hi]
             a0 = last[s]
             for i in range(start, n):
                 a1 = acc[i, s]
@@ -386,6 +392,8 @@ def _advance(acc, start, last, coef, groups, x, v, sd, sa):
                         xs[o] = xn
                         vs[o] = vn
                         ds[o] = max(ds[o], abs(_turning_value(xo, xn, vo, vn, hs[o])), abs(xn))
-                        fs[o] = max(fs[o], abs(_turning_value(yo, yn, go, gn, hs[o])), abs(yn))
+                        turn = _turning_value(yo, yn, go, gn, hs[o])
+                        us[o] = max(us[o], turn, yn)
+                        ws[o] = max(ws[o], -turn, -yn)
                     p0 = p1
                 a0 = a1
