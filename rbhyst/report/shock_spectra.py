@@ -63,23 +63,7 @@ def plot_pvss(srs: ShockSpectrum, path: Path, title: str = ""):
         shown = np.where(pv[:, j] > 0.0, pv[:, j], np.nan)
         ax.plot(f, shown, color=f"C{j}", lw=1.6, label=f"PVSS, Q = {plain_number(q)}", zorder=4)
     top = float(np.nanmax(np.where(pv > 0.0, pv, np.nan))) if np.any(pv > 0.0) else 1.0
-    lo_v = min(top / 1e3, 0.5 * SEVERITY_M_S[0][0] / 10.0)
-    hi_v = max(3.0 * top, 2.0 * SEVERITY_M_S[1][0])
-    lo_f, hi_f = f.min() / 1.5, f.max() * 1.5
-    ax.set_xlim(lo_f, hi_f)
-    ax.set_ylim(lo_v, hi_v)
-    ax.set_xscale("log")
-    ax.set_yscale("log")
-    _tripartite_grid(ax, lo_f, hi_f, lo_v, hi_v)
-    for v, label in SEVERITY_M_S:
-        ax.axhline(v, color="0.25", lw=1.0, ls="--", zorder=3)
-        # a third of the way across: the grid's own labels stand at the edges
-        ax.text(lo_f * (hi_f / lo_f) ** 0.33, v * 1.04, label, fontsize=7, color="0.25", va="bottom",
-                bbox={"fc": "white", "ec": "none", "pad": 0.5, "alpha": 0.8}, zorder=5)
-    plain_log_ticks(ax.xaxis)
-    plain_log_ticks(ax.yaxis)
-    ax.grid(False)
-    ax.set_xlabel("natural frequency [Hz]")
+    _tripartite_axes(ax, f, min(top / 1e3, 0.5 * SEVERITY_M_S[0][0] / 10.0), max(3.0 * top, 2.0 * SEVERITY_M_S[1][0]))
     ax.set_ylabel("pseudo-velocity 2πf·max|x| [m/s]")
     ax.legend(fontsize=7, loc="lower center")
     ax.set_title(f"Pseudo-velocity shock spectrum{': ' + title if title else ''}\n"
@@ -102,7 +86,6 @@ def plot_located_pvss(spectra, path: Path, title: str = ""):
     colours = {loc: f"C{i}" for i, loc in enumerate(others)} | {GROUND: "k"}
     first = spectra.spectra[0]
     f = first.frequencies_hz
-    lo_f, hi_f = f.min() / 1.5, f.max() * 1.5
     for ax, direction in zip(axes.flat, directions):
         # each panel its own range: a direction that hardly moves is read on its own scale
         pvs = [s.pv[:, 0] for (_, d), s in zip(spectra.signals, spectra.spectra) if d == direction]
@@ -118,19 +101,7 @@ def plot_located_pvss(spectra, path: Path, title: str = ""):
             label = "ground" if loc == GROUND else "G (mass centre)" if loc == CENTRE else loc
             ax.plot(f, np.where(pv > 0.0, pv, np.nan), color=colours[loc], lw={GROUND: 1.6, CENTRE: 2.4}.get(loc, 1.1),
                     alpha=0.6 if loc == CENTRE else 1.0, label=label, zorder=4)
-        ax.set_xlim(lo_f, hi_f)
-        ax.set_ylim(lo_v, hi_v)
-        ax.set_xscale("log")
-        ax.set_yscale("log")
-        _tripartite_grid(ax, lo_f, hi_f, lo_v, hi_v)
-        for v, label in SEVERITY_M_S:
-            ax.axhline(v, color="0.25", lw=1.0, ls="--", zorder=3)
-            ax.text(lo_f * (hi_f / lo_f) ** 0.33, v * 1.04, label, fontsize=7, color="0.25", va="bottom",
-                    bbox={"fc": "white", "ec": "none", "pad": 0.5, "alpha": 0.8}, zorder=5)
-        plain_log_ticks(ax.xaxis)
-        plain_log_ticks(ax.yaxis)
-        ax.grid(False)
-        ax.set_xlabel("natural frequency [Hz]")
+        _tripartite_axes(ax, f, lo_v, hi_v)
         ax.set_ylabel("pseudo-velocity [m/s]")
         ax.set_title(f"along {direction}", fontsize=9)
         ax.legend(fontsize=7, loc="lower center")
@@ -138,6 +109,26 @@ def plot_located_pvss(spectra, path: Path, title: str = ""):
                  "rising lines: constant displacement; falling: constant acceleration", fontsize=9)
     save(fig, path)
     return fig
+
+
+def _tripartite_axes(ax, f: np.ndarray, lo_v: float, hi_v: float) -> None:
+    """Log axes over the frequencies ``f`` (to 1.5 times beyond either end) and
+    pseudo-velocities lo_v..hi_v (m/s), with the tripartite grid and the severity lines."""
+    lo_f, hi_f = f.min() / 1.5, f.max() * 1.5
+    ax.set_xlim(lo_f, hi_f)
+    ax.set_ylim(lo_v, hi_v)
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    _tripartite_grid(ax, lo_f, hi_f, lo_v, hi_v)
+    for v, label in SEVERITY_M_S:
+        ax.axhline(v, color="0.25", lw=1.0, ls="--", zorder=3)
+        # a third of the way across: the grid's own labels stand at the edges
+        ax.text(lo_f * (hi_f / lo_f) ** 0.33, v * 1.04, label, fontsize=7, color="0.25", va="bottom",
+                bbox={"fc": "white", "ec": "none", "pad": 0.5, "alpha": 0.8}, zorder=5)
+    plain_log_ticks(ax.xaxis)
+    plain_log_ticks(ax.yaxis)
+    ax.grid(False)
+    ax.set_xlabel("natural frequency [Hz]")
 
 
 def _tripartite_grid(ax, lo_f: float, hi_f: float, lo_v: float, hi_v: float) -> None:
