@@ -293,6 +293,27 @@ def frequency_label_problem(path: Path, curve: Curve) -> str | None:
     return None
 
 
+def acceleration_column(path: Path, curve: Curve, what: str, example: str, checked: bool = False):
+    """(unit, problems) of a spectrum file of ``frequency_hz`` and an acceleration column whose header
+    states its unit (an RRS, an SRS specification): the unit is None where there are problems.
+    ``checked``: other problems were found before (no line then asks for the header's unit)."""
+    problems = [p for p in [frequency_label_problem(path, curve)] if p]
+    unit = None
+    if curve.header_line is not None and len(curve.labels) == 2:
+        token, unit = label_unit(curve.labels[1])
+        if unit is not None and unit.name not in ACCEL_TO_SI:
+            problems.append(f"{path}:{curve.header_line}: the value column {curve.labels[1]!r} is in {unit.name}; "
+                            f"{what} is an acceleration: {', '.join(ACCEL_TO_SI)}")
+            unit = None
+        elif unit is None and token is not None:
+            problems.append(f"{path}:{curve.header_line}: the value column {curve.labels[1]!r}: {token!r} is not "
+                            f"an acceleration unit rbhyst knows ({', '.join(ACCEL_TO_SI)})")
+    if unit is None and not problems and not checked:
+        where = f"{path}:{curve.header_line}" if curve.header_line is not None else f"{path}:1"
+        problems.append(f"{where}: the header must state the value's unit, as record files do: {example}")
+    return (unit if not problems else None), problems
+
+
 def read_rrs(path: Path, damping: float | None, name: str = "", damping_key: str = "--rrs-damping") -> RRS:
     """An RRS from a CSV: ``frequency_hz`` and a value column whose header states its unit
     (``sa_g``, ``sa_m_s2``, ``sa [g]``); ``damping`` is the ratio it is drawn for (required:
@@ -304,23 +325,9 @@ def read_rrs(path: Path, damping: float | None, name: str = "", damping_key: str
     elif not 0.0 <= damping < 1.0:
         problems.append(f"{damping_key}: {damping:g} must be a ratio from 0 to below 1 (0.05 for 5 %)")
     curve = read_curve(path, "an RRS")
-    problem = frequency_label_problem(path, curve)
-    if problem:
-        problems.append(problem)
-    unit = None
-    if curve.header_line is not None and len(curve.labels) == 2:
-        token, unit = label_unit(curve.labels[1])
-        if unit is not None and unit.name not in ACCEL_TO_SI:
-            problems.append(f"{path}:{curve.header_line}: the value column {curve.labels[1]!r} is in {unit.name}; "
-                            f"an RRS is an acceleration: {', '.join(ACCEL_TO_SI)}")
-            unit = None
-        elif unit is None and token is not None:
-            problems.append(f"{path}:{curve.header_line}: the value column {curve.labels[1]!r}: {token!r} is not "
-                            f"an acceleration unit rbhyst knows ({', '.join(ACCEL_TO_SI)})")
-    if unit is None and not problems:
-        where = f"{path}:{curve.header_line}" if curve.header_line is not None else f"{path}:1"
-        problems.append(f"{where}: the header must state the value's unit, as record files do: "
-                        "frequency_hz,sa_g (or sa_m_s2, sa [g], ...)")
+    unit, more = acceleration_column(path, curve, "an RRS", "frequency_hz,sa_g (or sa_m_s2, sa [g], ...)",
+                                     checked=bool(problems))
+    problems += more
     if problems:
         raise InputError(problems)
     return RRS(name or path.stem, float(damping), curve.x, curve.y * ACCEL_TO_SI[unit.name],

@@ -22,10 +22,9 @@ from pathlib import Path
 
 import numpy as np
 
-from rbhyst.analyses.qualification.rrs import ACCEL_TO_SI, frequency_label_problem
+from rbhyst.analyses.qualification.rrs import ACCEL_TO_SI, acceleration_column
 from rbhyst.errors import InputError
 from rbhyst.files.curves import read_curve
-from rbhyst.files.units import label_unit
 
 #: the band, dB about the specification (MIL-STD-810G 516.6 / 810H 516.8, 4.2.2)
 LOWER_DB, UPPER_DB = -1.5, 3.0
@@ -57,20 +56,7 @@ def read_specification(path: Path) -> Specification:
     """A specification from a CSV; problems name the file and line."""
     path = Path(path)
     curve = read_curve(path, "an SRS specification")
-    problems = [p for p in [frequency_label_problem(path, curve)] if p]
-    unit = None
-    if curve.header_line is not None and len(curve.labels) == 2:
-        token, unit = label_unit(curve.labels[1])
-        if unit is not None and unit.name not in ACCEL_TO_SI:
-            problems.append(f"{path}:{curve.header_line}: the value column {curve.labels[1]!r} is in {unit.name}; "
-                            f"an SRS is an acceleration: {', '.join(ACCEL_TO_SI)}")
-            unit = None
-        elif unit is None and token is not None:
-            problems.append(f"{path}:{curve.header_line}: the value column {curve.labels[1]!r}: {token!r} is not an "
-                            f"acceleration unit rbhyst knows ({', '.join(ACCEL_TO_SI)})")
-    if unit is None and not problems:
-        where = f"{path}:{curve.header_line}" if curve.header_line is not None else f"{path}:1"
-        problems.append(f"{where}: the header must state the value's unit: frequency_hz,srs_g (or srs_m_s2, ...)")
+    unit, problems = acceleration_column(path, curve, "an SRS", "frequency_hz,srs_g (or srs_m_s2, ...)")
     if len(curve.x) < 2:
         problems.append(f"{path}: at least two breakpoints (a range of frequencies)")
     if problems:
