@@ -435,7 +435,7 @@ def write_plots(result: Result, out: Path) -> list[str]:
     for name, _ in result.layout.points:
         jobs[f"response_{name}.png"] = partial(plot_point, result, name, out / f"response_{name}.png")
     jobs["element_loops.png"] = partial(plot_element_loops, result, out / "element_loops.png")
-    if result.spectra is not None and getattr(result.spectra, "kind", "sa") == "srs":
+    if result.spectra is not None and result.spectra.kind == "srs":
         from rbhyst.report.shock_spectra import plot_located_pvss
         from rbhyst.report.spectra import plot_spectra
 

@@ -166,13 +166,13 @@ def write_summary(result: Result, path: Path) -> None:
 
 def spectra_file(spectra) -> str:
     """The file a run's spectra go to: spectra.csv, or srs.csv for shock response spectra."""
-    return "srs.csv" if getattr(spectra, "kind", "sa") == "srs" else "spectra.csv"
+    return "srs.csv" if spectra.kind == "srs" else "spectra.csv"
 
 
 def write_spectra_csv(spectra: "LocatedSpectra", path: Path) -> None:
     """spectra.csv (rbhyst.solve.located.SPECTRA_COLUMNS), or a run's srs.csv (LocatedShockSpectra:
     rbhyst.solve.located_shock.RUN_SRS_COLUMNS)."""
-    if getattr(spectra, "kind", "sa") == "srs":
+    if spectra.kind == "srs":
         from rbhyst.solve.located_shock import RUN_SRS_COLUMNS as columns
     else:
         from rbhyst.solve.located import SPECTRA_COLUMNS as columns  # (the spectra's kernels only where there are spectra)

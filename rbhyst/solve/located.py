@@ -32,6 +32,9 @@ class LocatedSpectra:
     spectrum: Spectrum
     record_dt: tuple[tuple[str, float], ...] = ()
 
+    #: what they are (LocatedShockSpectra: "srs"), as the writers and figures tell them apart
+    kind = "sa"
+
     @property
     def locations(self) -> list[str]:
         return list(dict.fromkeys(loc for loc, _ in self.signals))
