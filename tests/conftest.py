@@ -138,3 +138,15 @@ from hypothesis import settings as _hypothesis_settings  # noqa: E402
 _hypothesis_settings.register_profile("ci", derandomize=True, print_blob=True)
 if __import__("os").environ.get("CI"):
     _hypothesis_settings.load_profile("ci")
+
+
+def pytest_collection_modifyitems(session, config, items):
+    """A test module's slow independent work (``start_in_background()``, e.g. numba compiling
+    every kernel) starts before the first test, once, where any of its tests is to run."""
+    started = set()
+    for item in items:
+        module = getattr(item, "module", None)
+        start = getattr(module, "start_in_background", None)
+        if start is not None and module not in started:
+            started.add(module)
+            start()

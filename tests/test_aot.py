@@ -2,10 +2,13 @@
 
 from __future__ import annotations
 
+import atexit
+import functools
 import json
 import os
 import subprocess
 import sys
+import tempfile
 
 import pytest
 
@@ -17,31 +20,65 @@ import os, rbhyst
 from rbhyst.solve.kernels.compiled import ahead_of_time
 if not os.environ.get("RBHYST_JIT") and not ahead_of_time():
     print(json.dumps(None)); sys.exit()
-res = rbhyst.run(sys.argv[1], integrator=sys.argv[2])
-print(json.dumps({"numba": "numba" in sys.modules, "peaks": res.extremes.peaks(),
-                  "last": res.table[-1].tolist(), "accuracy": res.accuracy["estimated_error"]}))
+for deck, method in zip(sys.argv[1::2], sys.argv[2::2]):
+    res = rbhyst.run(deck, integrator=method)
+    print(json.dumps({"numba": "numba" in sys.modules, "peaks": res.extremes.peaks(),
+                      "last": res.table[-1].tolist(), "accuracy": res.accuracy["estimated_error"]}))
 """
 
+SCENES = [("machine_on_mounts.toml", "chang"), ("machine_on_mounts.toml", "newmark"),
+          ("machine_on_mounts.toml", "adaptive"), ("seed_wri.toml", "chang")]
 
-def installed(env_extra: dict, deck: str, method: str, tmp_path):
+
+def _command(scenes) -> list[str]:
+    return [sys.executable, "-c", CODE, *(str(DECKS / d) if i % 2 == 0 else d
+                                          for pair in scenes for i, d in enumerate(pair))]
+
+
+def installed(env_extra: dict, scenes, cwd) -> list | None:
     """Run in a folder outside the source tree, so that the installed package is imported."""
     env = {**os.environ, **env_extra}
-    out = subprocess.run([sys.executable, "-c", CODE, deck, method], cwd=tmp_path, env=env,
-                         capture_output=True, text=True, check=True)
-    return json.loads(out.stdout.splitlines()[-1])
+    out = subprocess.run(_command(scenes), cwd=cwd, env=env, capture_output=True, text=True, check=True)
+    lines = [json.loads(line) for line in out.stdout.splitlines() if line.strip()]
+    return None if lines == [None] else lines
 
 
-@pytest.mark.parametrize("deck, method", [("machine_on_mounts.toml", "chang"), ("machine_on_mounts.toml", "newmark"),
-                                          ("machine_on_mounts.toml", "adaptive"), ("seed_wri.toml", "chang")])
+@functools.cache
+def _jit_job() -> subprocess.Popen:
+    """The JIT's runs of every scene, in one process started before the first test (conftest:
+    start_in_background): numba compiling the kernels takes minutes on one core, which the rest
+    of the suite uses meanwhile on the other."""
+    cwd = tempfile.mkdtemp(prefix="rbhyst-jit-")
+    return subprocess.Popen(_command(SCENES), cwd=cwd, env={**os.environ, "RBHYST_JIT": "1"},
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+
+def start_in_background() -> None:
+    from rbhyst.solve.kernels.compiled import ahead_of_time
+
+    if ahead_of_time():  # (otherwise the test skips, and nothing is compared)
+        atexit.register(lambda job: job.poll() is None and job.kill(), _jit_job())
+
+
+@functools.cache
+def _jit_results() -> dict:
+    job = _jit_job()
+    out, err = job.communicate()
+    assert job.returncode == 0, err
+    return dict(zip(SCENES, (json.loads(line) for line in out.splitlines() if line.strip())))
+
+
+@pytest.mark.parametrize("deck, method", SCENES)
 def test_ahead_of_time_equals_jit_and_loads_no_numba(tmp_path, deck, method):
     """The machine with exact rotations (its estimate the adaptive solutions'), and the seed deck,
     whose estimate is its companion's (the run's modified equation, the re-driven forces)."""
-    deck = str(DECKS / deck)
-    aot = installed({}, deck, method, tmp_path)
+    aot = installed({}, [(deck, method)], tmp_path)
     if aot is None:
         pytest.skip("the installed rbhyst has no kernels built ahead of time (an editable install, or no compiler)")
-    jit = installed({"RBHYST_JIT": "1"}, deck, method, tmp_path)
+    jit = _jit_results()[(deck, method)]
+    aot = aot[0]
     assert aot["numba"] is False  # a run loads no numba at all
+    assert jit["numba"] is True  # the comparison is with the JIT's kernels
     assert aot["peaks"] == jit["peaks"] and aot["last"] == jit["last"] and aot["accuracy"] == jit["accuracy"]
 
 
