@@ -78,6 +78,8 @@ NEGLIGIBLE = 0.01
 #: the spectra's error is estimated on runs of at most this many compute steps (the reference
 #: is then computed at each of them, as the run's spectra were driven)
 SPECTRA_ROWS = 500_000
+#: rows of the adaptive solution's table made at a time for the columns compared
+VALUES_BLOCK = 16_384
 #: a warning names at most this many quantities beside the worst (then "and k more")
 WARN_NAMES = 8
 
@@ -146,6 +148,8 @@ class Estimator:
         self.layout = layout
         self._pieces = None
         self._solutions: dict[tuple[float, int], object] = {}
+        self._values: dict[tuple[float, int], np.ndarray] = {}  # (the columns compared, at self.t)
+        self._stats: dict[tuple[float, int], dict] = {}
         self._columns = None
         self.wall_s = 0.0
 
@@ -173,9 +177,37 @@ class Estimator:
         return self._columns
 
     def values(self, rtol: float) -> np.ndarray:
-        """(len(self.t), k) the estimate's columns of the adaptive solution at ``rtol``."""
-        raw = self.solution(rtol).raw(self.system)
-        return self.layout.table(raw)[:, [c for _, c, _ in self.columns]]
+        """(len(self.t), k) the estimate's columns of the adaptive solution at ``rtol``: integrated
+        a block of rows at a time and only those columns kept, unless the solution is at hand."""
+        from rbhyst.solve.integrators import reference
+
+        key = (rtol, len(self.t), float(self.t[-1]))
+        if key not in self._values:
+            cols = [c for _, c, _ in self.columns]
+            n = len(self.t)
+            out = np.empty((n, len(cols)))
+            whole = self._solutions.get(key)
+            tic = time.perf_counter()
+            try:
+                if whole is None:
+                    if self._pieces is None:
+                        self._pieces = reference.load_pieces(self.system, self.t_end)
+                    run = reference.Integration(self.system, n, lambda lo, hi: self.t[lo:hi], rtol, pieces=self._pieces,
+                                                max_steps=self.max_steps, window=VALUES_BLOCK, t_end=float(self.t[-1]))
+                for lo in range(0, n, VALUES_BLOCK):
+                    part = whole.raw(self.system).slice(lo, lo + VALUES_BLOCK) if whole is not None else \
+                        run.take(min(n, lo + VALUES_BLOCK)).raw(self.system)
+                    out[lo:lo + VALUES_BLOCK] = self.layout.table(part)[:, cols]
+            finally:
+                self.wall_s += time.perf_counter() - tic
+            self._stats[key] = whole.stats if whole is not None else run.stats()
+            self._values[key] = out
+        return self._values[key]
+
+    def stats(self, rtol: float) -> dict:
+        """What the adaptive solution at ``rtol`` at self.t took (reference.Integration.stats)."""
+        key = (rtol, len(self.t), float(self.t[-1]))
+        return self._stats[key] if key in self._stats else self.solution(rtol).stats
 
     def assess(self, values: np.ndarray, rtol: float = REFERENCE_RTOL, check: float | None = None,
                loose: np.ndarray | None = None) -> dict:
@@ -185,10 +217,10 @@ class Estimator:
         keys = [k for k, _, _ in self.columns]
         tight = self.values(rtol)
         err = column_errors(values, tight, keys, self.families, self.system)
-        sol = self.solution(rtol)
+        stats = self.stats(rtol)
         out = {"estimated_error": dict(zip(keys, map(float, err))),
-               "reference": {"rtol": float(f"{rtol:.6g}"), "steps": sol.stats["steps"],
-                             "reversals": sol.stats["reversals"]}}
+               "reference": {"rtol": float(f"{rtol:.6g}"), "steps": stats["steps"],
+                             "reversals": stats["reversals"]}}
         if check is not None:
             self.add_check(out, values, rtol, check, loose)
         return out

@@ -41,7 +41,9 @@ import numpy as np
 from rbhyst.solve.integrators import dop853_tableau as _dop
 from rbhyst.errors import AnalysisError
 from rbhyst.solve.kernels.compiled import kernel
-from rbhyst.solve.kernels.dop853_layout import (NS, R_ELEMENT, R_EVENTS, R_FEV, R_HMAX, R_HMIN, R_INFO, R_REJECTED, R_START_FLIPS, R_STATUS, R_STEPS, R_TIME, ST_NONFINITE, ST_OK, ST_OVERFLOW, ST_STEP_TOO_SMALL, ST_TOO_MANY_STEPS, ny)
+from rbhyst.solve.kernels.dop853_layout import (NS, P_FIRST, P_PHASE, P_ROWS, P_SIZE, P_T, R_ELEMENT, R_EVENTS, R_FEV,
+    R_HMAX, R_HMIN, R_INFO, R_REJECTED, R_START_FLIPS, R_STATUS, R_STEPS, R_TIME, ST_NONFINITE, ST_OK, ST_OVERFLOW,
+    ST_PAUSED, ST_STEP_TOO_SMALL, ST_TOO_MANY_STEPS, ny)
 from rbhyst.model.kinematics import loads_at, rows_at
 from rbhyst.model.records import Series
 from rbhyst.model.signals import SINE
@@ -246,82 +248,181 @@ class Solution:
         return Raw(t=self.t, d=self.q, v=v, u=self.eu, f=self.ef, e=energy)
 
 
+#: output rows a streamed run's adaptive integration holds at a time (and per call of its kernel)
+WINDOW_ROWS = 32_768
+
+
+class Integration:
+    """The adaptive integration of ``system`` from rest over ``n_rows`` output rows, whose times
+    ``times(lo, hi)`` gives (rows lo .. hi - 1, increasing, from 0), taken a block at a time
+    (:meth:`take`): its memory is a window's rows, however long the run. The compiled kernel
+    pauses where a step would need rows past those it was given and goes on from there, so the
+    rows are the same to the bit however they are taken (tests/test_reference_windows.py).
+
+    ``pieces``: the load from :func:`load_pieces`, when a caller integrates the same scene twice;
+    ``max_steps``: a budget of steps (events cost one each)."""
+
+    def __init__(self, system, n_rows: int, times, rtol: float = RTOL, pieces=None, max_steps: int = MAX_STEPS,
+                 window: int = WINDOW_ROWS, t_end: float | None = None):
+        self.system, self.n_rows, self.times, self.rtol = system, int(n_rows), times, rtol
+        self.window = max(1, int(window))
+        self.max_steps = max_steps
+        t_end = float(times(n_rows - 1, n_rows)[0]) if t_end is None else t_end
+        self.pieces = pieces if pieces is not None else load_pieces(system, t_end)
+        brk, coef, sig = self.pieces.brk, self.pieces.ends, self.pieces.analytic
+        self.atol, self.length, self.w1 = _scales(system, self.pieces, rtol)
+        ne, n = system.bvec.shape
+        self.width, self.ne = ny(n), ne
+        if ("start", id(system)) not in self.pieces.basis:
+            self.pieces.basis[("start", id(system))] = _initial_state(system, self.pieces)
+        self.init, y0 = (a.copy() for a in self.pieces.basis[("start", id(system))])
+        self.info = np.zeros(R_INFO)
+        self.at = np.zeros(P_SIZE)
+        # M^-1 as a tuple: its length n is a constant of the compiled kernel (one compilation per n)
+        minv = tuple(1.0 / system.mass)
+        self.args = (minv, np.ascontiguousarray(system.bvec), system.kernel_axial, system.rotation_index, system.mult,
+                     system.kernel_params, np.ascontiguousarray(system.kernel_damping))
+        self.work = (np.zeros((13, ne)), np.zeros((7, self.width)), np.zeros((16, self.width)), np.zeros((7, self.width)),
+                     np.zeros((4, max(system.excitation.width, ne))), np.zeros(NS + 1))
+        self.head = (rtol, self.atol, self.init, y0, 1e-6, int(max_steps), _A, _B, _C, _E3, _E5, _D)
+        self._kernel = kernel("integrate", n)
+        # compile (or load) before the clock starts, on a problem of one short piece (the first piece
+        # may be the whole run: an analytic signal's)
+        warm = np.zeros(P_SIZE)
+        warm[P_ROWS] = 1
+        self._kernel(*self.args, np.array([0.0, min(brk[1], 1e-6 * (brk[1] - brk[0]) + 1e-12)]), coef[:1].copy(), sig,
+                     np.zeros(1), *self.head, *self._buffers(1)[1:], self.info, *self.work, warm)
+        self.info[:] = 0.0
+        self.at[P_ROWS] = self.n_rows
+        self.wall_s = 0.0
+        self._buf = self._buffers(0)
+        self._lo = self._hi = 0  # rows lo .. hi - 1 are computed and not yet taken
+
+    def _buffers(self, rows: int):
+        return (np.zeros(rows), np.zeros((rows, self.width)), np.zeros((rows, self.ne)), np.zeros((rows, self.ne)),
+                np.zeros(rows))
+
+    def take(self, hi: int) -> Solution:
+        """Rows from the first not yet taken to hi - 1 (the last block: the solver's stats and stops)."""
+        size = self.window
+        while self._hi < hi:
+            want = max(size, hi - self._hi)
+            self._room(want)
+            at = self._hi - self._lo
+            top = min(self.n_rows, self._hi + want)
+            t, y, eu, ef, eh = (b[at:at + top - self._hi] for b in self._buf)
+            t[:] = self.times(self._hi, top)
+            self.at[P_FIRST] = self._hi
+            before = (self.at[P_T], self.at[P_PHASE])
+            tic = time.perf_counter()
+            rows = self._kernel(*self.args, self.pieces.brk, self.pieces.ends, self.pieces.analytic, t, *self.head,
+                                y, eu, ef, eh, self.info, *self.work, self.at)
+            self.wall_s += time.perf_counter() - tic
+            self._check(rows)
+            if rows == self._hi and (self.at[P_T], self.at[P_PHASE]) == before:
+                size *= 2  # (one step covers more rows than were given: give more)
+            self._hi = rows
+        lo, kept = self._lo, self._hi - self._lo
+        whole = lo == 0 and hi == self.n_rows == len(self._buf[0])
+        t, y, eu, ef, eh = (b if whole else b[:hi - lo].copy() for b in self._buf)
+        if not whole:  # the rows computed past hi go to the buffers' start
+            for b in self._buf:
+                b[:kept - (hi - lo)] = b[hi - lo:kept]
+        self._lo = hi
+        last = hi == self.n_rows
+        return Solution(t, y, eu, ef, eh, self.stats() if last else {}, self.stops() if last else None)
+
+    def _room(self, more: int) -> None:
+        """Buffers for the rows not yet taken (at their start) and ``more`` after them."""
+        kept = self._hi - self._lo
+        if len(self._buf[0]) < kept + more:
+            new = self._buffers(kept + more)
+            for a, b in zip(new, self._buf):
+                a[:kept] = b[:kept]
+            self._buf = new
+
+    def _check(self, rows: int) -> None:
+        status = int(self.info[R_STATUS])
+        if status == ST_OK and rows == self.n_rows or status == ST_PAUSED:
+            return
+        t, rtol = self.info[R_TIME], self.rtol
+        if status == ST_OVERFLOW:
+            raise AnalysisError(f"t = {t:.6g} s: the adaptive solution took element {int(self.info[R_ELEMENT]) + 1} "
+                                "(distinct elements, deck order) out of its calibrated range (exp overflow)")
+        if status == ST_TOO_MANY_STEPS:
+            raise TooManySteps(f"t = {t:.6g} s: the adaptive solution (rtol {rtol:g}) took more than "
+                               f"{int(self.max_steps)} steps (reversals are events: each costs a step)")
+        why = {ST_STEP_TOO_SMALL: "its step size fell below round-off",
+               ST_NONFINITE: "the solution is no longer finite"}.get(status, "it stopped early")
+        raise AnalysisError(f"t = {t:.6g} s: the adaptive solution (rtol {rtol:g}) failed: {why}")
+
+    def stats(self) -> dict:
+        info, n = self.info, self.system.n
+        return {
+            "method": "DOP853: explicit Runge-Kutta 8(5,3) with 7th-order dense output (Hairer-Norsett-Wanner), "
+                      "compiled with numba",
+            "rtol": self.rtol,
+            "atol_q": self.atol[:n].tolist(),
+            "atol_v": self.atol[n:2 * n].tolist(),
+            "atol_basis": {"displacement_scale_m": self.length, "lowest_circular_frequency_rad_s": self.w1},
+            "events": "reversals: element velocity b.v crossing zero against its branch, located on the dense "
+                      "output and stepped to exactly; load breakpoints: record samples (linear between them), the "
+                      "ends and corners of analytic signals (evaluated exactly between them)",
+            "load_pieces": int(len(self.pieces.ends)),
+            "steps": int(info[R_STEPS]),
+            "rejected_steps": int(info[R_REJECTED]),
+            "reversals": int(info[R_EVENTS]),
+            "branch_corrections_at_step_start": int(info[R_START_FLIPS]),
+            "rhs_evaluations": int(info[R_FEV]),
+            "smallest_step_s": float(info[R_HMIN]),
+            "largest_step_s": float(info[R_HMAX]),
+            "wall_s": self.wall_s,
+        }
+
+    def stops(self) -> np.ndarray | None:
+        """(rows, 4) as rbhyst.solve.plan.stop_record's, at the end; None for a scene without stops."""
+        system, init = self.system, self.init
+        if not system.has_stops:
+            return None
+        ms = self.work[0][6:13]  # the stops' (kernels.dop853._stops_at): the loss counted from the start (a
+        # contact the weight rests on has lost what its loading did)
+        lost = ms[2] + _open_loss(system, ms[0], ms[1]) - _open_loss(system, init[4], init[5])
+        return np.ascontiguousarray(np.column_stack([ms[3], lost, ms[4], ms[5]]))
+
+
 def integrate(system, t_out: np.ndarray, rtol: float = RTOL, pieces=None, max_steps: int = MAX_STEPS) -> Solution:
-    """Integrate from rest to t_out[-1] with output at the increasing times t_out (from 0).
+    """Integrate from rest to t_out[-1] with output at the increasing times t_out (from 0), all
+    at once (:class:`Integration` takes them a block at a time, to the same bits).
 
     ``pieces``: the load from :func:`load_pieces`, when a caller
     integrates the same scene twice; ``max_steps``: a budget of steps (events cost one each).
     Raises AnalysisError where it cannot finish (TooManySteps past the budget).
     """
     t_out = np.ascontiguousarray(t_out, dtype=float)
-    t_end = float(t_out[-1])
-    n_rows = len(t_out)
-    pieces = pieces if pieces is not None else load_pieces(system, t_end)
-    brk, coef, sig = pieces.brk, pieces.ends, pieces.analytic
-    atol, length, w1 = _scales(system, pieces, rtol)
-    ne, n = system.bvec.shape
-    width = ny(n)
-    if ("start", id(system)) not in pieces.basis:
-        pieces.basis[("start", id(system))] = _initial_state(system, pieces)
-    init, y0 = (a.copy() for a in pieces.basis[("start", id(system))])
-    out_y = np.zeros((n_rows, width))
-    out_eu = np.zeros((n_rows, ne))
-    out_ef = np.zeros((n_rows, ne))
-    out_eh = np.zeros(n_rows)
-    info = np.zeros(R_INFO)
-    # M^-1 as a tuple: its length n is a constant of the compiled kernel (one compilation per n)
-    minv = tuple(1.0 / system.mass)
-    args = (minv, np.ascontiguousarray(system.bvec), system.kernel_axial, system.rotation_index, system.mult, system.kernel_params,
-            np.ascontiguousarray(system.kernel_damping))
-    work = (np.zeros((13, ne)), np.zeros((7, width)), np.zeros((16, width)), np.zeros((7, width)), np.zeros((4, max(system.excitation.width, ne))),
-            np.zeros(NS + 1))
-    tail = (rtol, atol, init, y0, 1e-6, int(max_steps), _A, _B, _C, _E3, _E5, _D, out_y, out_eu, out_ef, out_eh, info, *work)
-    _integrate = kernel("integrate", n)
-    # compile (or load) before the clock starts, on a problem of one short piece (the first piece
-    # may be the whole run: an analytic signal's)
-    _integrate(*args, np.array([0.0, min(brk[1], 1e-6 * (brk[1] - brk[0]) + 1e-12)]), coef[:1].copy(), sig,
-               t_out[:1].copy(), *tail)
-    info[:] = 0.0
-    start = time.perf_counter()
-    rows = _integrate(*args, brk, coef, sig, t_out, *tail)
-    wall = time.perf_counter() - start
-    status = int(info[R_STATUS])
-    if status != ST_OK or rows != n_rows:
-        t = info[R_TIME]
-        if status == ST_OVERFLOW:
-            raise AnalysisError(f"t = {t:.6g} s: the adaptive solution took element {int(info[R_ELEMENT]) + 1} "
-                                "(distinct elements, deck order) out of its calibrated range (exp overflow)")
-        if status == ST_TOO_MANY_STEPS:
-            raise TooManySteps(f"t = {t:.6g} s: the adaptive solution (rtol {rtol:g}) took more than "
-                               f"{int(max_steps)} steps (reversals are events: each costs a step)")
-        why = {ST_STEP_TOO_SMALL: "its step size fell below round-off",
-               ST_NONFINITE: "the solution is no longer finite"}.get(status, "it stopped early")
-        raise AnalysisError(f"t = {t:.6g} s: the adaptive solution (rtol {rtol:g}) failed: {why}")
-    stats = {
-        "method": "DOP853: explicit Runge-Kutta 8(5,3) with 7th-order dense output (Hairer-Norsett-Wanner), "
-                  "compiled with numba",
-        "rtol": rtol,
-        "atol_q": atol[:n].tolist(),
-        "atol_v": atol[n:2 * n].tolist(),
-        "atol_basis": {"displacement_scale_m": length, "lowest_circular_frequency_rad_s": w1},
-        "events": "reversals: element velocity b.v crossing zero against its branch, located on the dense "
-                  "output and stepped to exactly; load breakpoints: record samples (linear between them), the "
-                  "ends and corners of analytic signals (evaluated exactly between them)",
-        "load_pieces": int(len(coef)),
-        "steps": int(info[R_STEPS]),
-        "rejected_steps": int(info[R_REJECTED]),
-        "reversals": int(info[R_EVENTS]),
-        "branch_corrections_at_step_start": int(info[R_START_FLIPS]),
-        "rhs_evaluations": int(info[R_FEV]),
-        "smallest_step_s": float(info[R_HMIN]),
-        "largest_step_s": float(info[R_HMAX]),
-        "wall_s": wall,
-    }
-    ms = work[0][6:13]  # the stops' (kernels.dop853._stops_at): as plan.stop_record's columns, the
-    # loss counted from the start (a contact the weight rests on has lost what its loading did)
-    lost = ms[2] + _open_loss(system, ms[0], ms[1]) - _open_loss(system, init[4], init[5])
-    stops = np.ascontiguousarray(np.column_stack([ms[3], lost, ms[4], ms[5]]))
-    return Solution(t_out, out_y, out_eu, out_ef, out_eh, stats, stops if system.has_stops else None)
+    run = Integration(system, len(t_out), lambda lo, hi: t_out[lo:hi], rtol, pieces, max_steps, window=len(t_out),
+                      t_end=float(t_out[-1]))
+    return run.take(len(t_out))
+
+
+def _split_times(bounds: np.ndarray, substeps: np.ndarray, dt: float):
+    """times(lo, hi): rows lo .. hi - 1 of t = 0 followed by plan.compute_times(bounds, substeps,
+    dt), the same values, without the whole array."""
+    starts = np.concatenate([[1], 1 + np.cumsum(np.diff(bounds) * substeps)])
+
+    def times(lo: int, hi: int) -> np.ndarray:
+        out = np.empty(hi - lo)
+        if lo == 0:
+            out[0] = 0.0
+        for i in range(max(0, np.searchsorted(starts, lo, side="right") - 1), len(substeps)):
+            a, b = max(lo, int(starts[i])), min(hi, int(starts[i + 1]))
+            if a >= hi:
+                break
+            if a < b:
+                m, first = int(substeps[i]), int(bounds[i]) * int(substeps[i])
+                out[a - lo:b - lo] = dt * ((first + np.arange(a - int(starts[i]) + 1, b - int(starts[i]) + 1)) / m)
+        return out
+
+    return times
 
 
 def _open_loss(system, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
@@ -343,12 +444,14 @@ def solve_with_stats(system, settings, rtol: float = RTOL, t_out: np.ndarray | N
     in a fixed-step run), or at the increasing times ``t_out`` (from 0) if given, all kept: a
     study asks for the union of several grids.
     """
-    from rbhyst.solve.plan import Rows, body_sink, compute_times, grid, run_spectra, splitting
+    from rbhyst.solve.plan import Rows, body_sink, grid, run_spectra, splitting
 
     n_steps, _ = grid(system, settings)
     every = 1
     spectra = None  # (a study's union of grids is not uniform: no spectra there)
-    segments = None
+    # blocks of rows as Rows.add takes them: (rows, compute steps per output step), row 0 first
+    blocks = [(1, 1)] if t_out is None else [(1, 1), (len(t_out) - 1, 1)]
+    segmented = False
     if t_out is None:
         if n_steps < settings.every:
             from rbhyst.errors import InputError
@@ -360,27 +463,31 @@ def solve_with_stats(system, settings, rtol: float = RTOL, t_out: np.ndarray | N
         if spectra is not None or substeps.max() > 1:
             # the solution at every compute step the fixed-step methods would take: the spectra
             # are driven there, and the peaks between the rows are seen (Rows.add)
-            t_out = np.concatenate([[0.0], compute_times(bounds, substeps, settings.dt)])
-            segments = (bounds, substeps)
+            times = _split_times(bounds, substeps, settings.dt)
+            blocks += [(int(hi - lo) * int(m), int(m)) for lo, hi, m in zip(bounds[:-1], bounds[1:], substeps)]
+            segmented = True
         else:
-            t_out = settings.dt * np.arange(n_steps + 1)
-    sol = integrate(system, t_out, rtol)
-    raw = sol.raw(system)
+            times = lambda lo, hi: settings.dt * np.arange(lo, hi)  # noqa: E731
+            blocks.append((n_steps, 1))
+        n_rows, window = sum(b for b, _ in blocks), WINDOW_ROWS
+    else:
+        t_out = np.ascontiguousarray(t_out, dtype=float)
+        times, n_rows = (lambda lo, hi: t_out[lo:hi]), len(t_out)
+        window = n_rows
+    run = Integration(system, n_rows, times, rtol, window=window)
     layout = Layout(system, settings.points)
-    rows = Rows(layout, n_steps if segments else len(sol.t) - 1, every, keep, csv,
+    rows = Rows(layout, n_steps if segmented else n_rows - 1, every, keep, csv,
                 spectra=None if spectra is None else body_sink(system, settings), dt=settings.dt,
-                compute_steps=len(sol.t) - 1)
+                compute_steps=n_rows - 1)
     try:
-        rows.add(raw.slice(0, 1))
-        if segments is None:
-            rows.add(raw.slice(1, len(sol.t)))
-        else:
-            i = 1
-            bounds, substeps = segments
-            for lo, hi, nsub in zip(bounds[:-1], bounds[1:], substeps):
-                n = int(hi - lo) * int(nsub)
-                rows.add(raw.slice(i, i + n), sub=int(nsub))
-                i += n
+        done = 0
+        for size, sub in blocks:
+            # (each block in pieces of whole output steps of at most a window's rows)
+            piece = max(sub, window // sub * sub)
+            for lo in range(done, done + size, piece):
+                sol = run.take(min(done + size, lo + piece))
+                rows.add(sol.raw(system), sub=sub)
+            done += size
     finally:
         table = rows.close()
     stats = RunStats(steps=n_steps, steps_taken=sol.stats["steps"], wall_s=sol.stats["wall_s"])

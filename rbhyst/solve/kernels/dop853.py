@@ -14,7 +14,10 @@ import math
 from numba import njit
 
 from rbhyst.model.hysteresis import ALPHA, EXP_ARG_MAX
-from rbhyst.solve.kernels.dop853_layout import (NS, R_ELEMENT, R_EVENTS, R_FEV, R_HMAX, R_HMIN, R_REJECTED, R_START_FLIPS, R_STATUS, R_STEPS, R_TIME, SIMULTANEOUS, ST_NONFINITE, ST_OK, ST_OVERFLOW, ST_STEP_TOO_SMALL, ST_TOO_MANY_STEPS)
+from rbhyst.solve.kernels.dop853_layout import (NS, P_EVENTS, P_FEV, P_FIRST, P_H, P_HMAX, P_HMIN, P_IO, P_PHASE, P_PIECE, P_REJECTED, P_ROWS,
+    P_START_FLIPS, P_STEPS, P_T, PH_END, PH_PIECE, PH_REST, PH_STEP, R_ELEMENT, R_EVENTS, R_FEV, R_HMAX, R_HMIN, R_REJECTED,
+    R_START_FLIPS, R_STATUS, R_STEPS, R_TIME, SIMULTANEOUS, ST_NONFINITE, ST_OK, ST_OVERFLOW, ST_PAUSED, ST_STEP_TOO_SMALL,
+    ST_TOO_MANY_STEPS)
 from rbhyst.model.signals import HALF_SINE, HAVERSINE, ROW_SIZE as ROW, SAWTOOTH, SINE
 from rbhyst.model.stop import STOP_E, STOP_K, STOP_LOWER, STOP_ROW, STOP_UPPER, stop_force
 from rbhyst.model.vrm import branch_eval, branch_row
@@ -333,9 +336,15 @@ def _g_dense(F, y_old, x, bvec, axial, rot, e, s, n):
 
 @njit(cache=True, error_model="numpy", _nrt=False)
 def _integrate(minv, bvec, axial, rot, mult, params, cm, brk, pcoef, sig, t_out, rtol, atol, init, y0, h_first, max_steps,
-               A, B, C, E3, E5, D, out_y, out_eu, out_ef, out_eh, info, el, vec, K, F, p, gs):
-    """The whole integration; el (13, ne), vec (7, ny), K (16, ny), F (7, ny), p (4, max(n, ne)), gs (NS + 1,)
-    are its work space (allocated by the caller: no reference counting in here), y0 (n,) the start.
+               A, B, C, E3, E5, D, out_y, out_eu, out_ef, out_eh, info, el, vec, K, F, p, gs, at):
+    """The integration, or its part whose output rows are t_out: rows at[P_FIRST] ..
+    at[P_FIRST] + len(t_out) - 1 of at[P_ROWS] (out_* hold those rows). A call that would need a
+    later row pauses before the step that needs it (info[R_STATUS] = ST_PAUSED) and records in
+    ``at`` where it stopped; the next call, given the next rows and the same work space, goes on
+    from there, so the steps, and every row, are the same to the bit however the rows are cut.
+
+    el (13, ne), vec (7, ny), K (16, ny), F (7, ny), p (4, max(n, ne)), gs (NS + 1,) are its work
+    space (allocated by the caller: no reference counting in here), y0 (n,) the start.
 
     One function, long, because numba keeps the stepper's state in registers only within a function.
     """
@@ -344,37 +353,40 @@ def _integrate(minv, bvec, axial, rot, mult, params, cm, brk, pcoef, sig, t_out,
     ny = 2 * n + 2  # q, v, input energy, viscous work
     nerr = 2 * n  # under error control: not the energies
     n_int = brk.shape[0] - 1
-    n_out = t_out.shape[0]
-    el[:, :] = 0.0
-    vec[:, :] = 0.0
+    n_out = int(at[P_ROWS])
+    io0 = int(at[P_FIRST])
+    lim = min(n_out, io0 + t_out.shape[0])  # rows up to lim - 1 are at hand
+    phase = int(at[P_PHASE])
     s = el[0]
     up = el[1]
     gp = el[2]
     ap = el[3]  # C_s(u_P): antiderivative at the branch start
     wacc = el[4]  # work of the element up to its branch start
     ms = el[6:13]  # the stops' (_stops_at), from init's rows 4 and 5 (their held peaks); 6: their work at the start
-    for e in range(ne):
-        # init rows: branch sign, its start u_P, the gap there, the antiderivative there
-        s[e] = init[0, e]
-        up[e] = init[1, e]
-        if math.isnan(init[2, e]):  # virgin: f = 0 at u = 0
-            row = branch_row(s[e])
-            c, kc, big, ok = branch_eval(params, e, row, s[e], 0.0)
-            gp[e] = c
-            ap[e] = big
-        else:
-            gp[e] = init[2, e]
-            ap[e] = init[3, e]
-        if init.shape[0] > 5:
-            ms[0, e] = init[4, e]
-            ms[1, e] = init[5, e]
-
     y = vec[0]
-    for i in range(n):
-        y[i] = y0[i]
-    if params.shape[1] > STOP_ROW:  # the stops' work is counted from the start, as the elements'
+    if phase == PH_REST:
+        el[:, :] = 0.0
+        vec[:, :] = 0.0
         for e in range(ne):
-            _, ms[6, e] = stop_force(params, e, _u_el(bvec, axial, rot, e, y, n), ms[0, e], ms[1, e])
+            # init rows: branch sign, its start u_P, the gap there, the antiderivative there
+            s[e] = init[0, e]
+            up[e] = init[1, e]
+            if math.isnan(init[2, e]):  # virgin: f = 0 at u = 0
+                row = branch_row(s[e])
+                c, kc, big, ok = branch_eval(params, e, row, s[e], 0.0)
+                gp[e] = c
+                ap[e] = big
+            else:
+                gp[e] = init[2, e]
+                ap[e] = init[3, e]
+            if init.shape[0] > 5:
+                ms[0, e] = init[4, e]
+                ms[1, e] = init[5, e]
+        for i in range(n):
+            y[i] = y0[i]
+        if params.shape[1] > STOP_ROW:  # the stops' work is counted from the start, as the elements'
+            for e in range(ne):
+                _, ms[6, e] = stop_force(params, e, _u_el(bvec, axial, rot, e, y, n), ms[0, e], ms[1, e])
     y_new = vec[1]
     y_ev = vec[2]
     ytmp = vec[3]
@@ -382,33 +394,52 @@ def _integrate(minv, bvec, axial, rot, mult, params, cm, brk, pcoef, sig, t_out,
     f_new = vec[5]
     yo = vec[6]
     xroot = el[5]  # where in the step each element reverses (2: not in this step)
-    t = 0.0
-    h = h_first
-    io = 0
-    n_steps = 0
-    n_rej = 0
-    n_ev = 0
-    n_fev = 0
-    n_start = 0
-    h_min_seen = math.inf
-    h_max_seen = 0.0
+    if phase == PH_REST:
+        t = 0.0
+        h = h_first
+        io = 0
+        k_first = 0
+        n_steps = 0
+        n_rej = 0
+        n_ev = 0
+        n_fev = 0
+        n_start = 0
+        h_min_seen = math.inf
+        h_max_seen = 0.0
+    else:
+        t = at[P_T]
+        h = at[P_H]
+        io = int(at[P_IO])
+        k_first = n_int if phase == PH_END else int(at[P_PIECE])
+        n_steps = int(at[P_STEPS])
+        n_rej = int(at[P_REJECTED])
+        n_ev = int(at[P_EVENTS])
+        n_fev = int(at[P_FEV])
+        n_start = int(at[P_START_FLIPS])
+        h_min_seen = at[P_HMIN]
+        h_max_seen = at[P_HMAX]
     exponent = -1.0 / 8.0
 
-    for k in range(n_int):
+    for k in range(k_first, n_int):
         tb = brk[k + 1]
-        bad = _rhs(t, y, k, brk, pcoef, sig, minv, bvec, axial, rot, mult, params, cm, s, up, gp, ms, p, f)
-        n_fev += 1
-        if bad >= 0:
-            info[R_STATUS] = ST_OVERFLOW
-            info[R_ELEMENT] = bad
-            info[R_TIME] = t
-            return io
-        if io < n_out and t_out[io] <= t:
-            # outputs at the start (t = 0) come from the state itself
-            while io < n_out and t_out[io] <= t:
-                for i in range(ny):
-                    yo[i] = y[i]
-                io = _write(io, yo, bvec, axial, rot, mult, params, s, up, gp, ap, wacc, ms, out_y, out_eu, out_ef, out_eh, n)
+        if not (phase == PH_STEP and k == k_first):  # (a call that goes on within piece k has its f)
+            if lim < n_out and t_out[lim - 1 - io0] <= t:
+                # the rows at the piece's start may run past those at hand
+                _pause(at, info, PH_PIECE, t, h, k, io, n_steps, n_rej, n_ev, n_fev, n_start, h_min_seen, h_max_seen)
+                return io
+            bad = _rhs(t, y, k, brk, pcoef, sig, minv, bvec, axial, rot, mult, params, cm, s, up, gp, ms, p, f)
+            n_fev += 1
+            if bad >= 0:
+                info[R_STATUS] = ST_OVERFLOW
+                info[R_ELEMENT] = bad
+                info[R_TIME] = t
+                return io
+            if io < lim and t_out[io - io0] <= t:
+                # outputs at the start (t = 0) come from the state itself
+                while io < lim and t_out[io - io0] <= t:
+                    for i in range(ny):
+                        yo[i] = y[i]
+                    io = _write(io - io0, yo, bvec, axial, rot, mult, params, s, up, gp, ap, wacc, ms, out_y, out_eu, out_ef, out_eh, n) + io0
         while tb - t > 1e-13 * max(1.0, abs(tb)):
             if n_steps + n_rej > max_steps:
                 info[R_STATUS] = ST_TOO_MANY_STEPS
@@ -417,6 +448,10 @@ def _integrate(minv, bvec, axial, rot, mult, params, cm, brk, pcoef, sig, t_out,
             hh = h
             if t + hh >= tb - 1e-13 * max(1.0, abs(tb)):
                 hh = tb - t
+            if lim < n_out and t_out[lim - 1 - io0] <= t + hh + 1e-12 * max(1.0, abs(t + hh)):
+                # this step may write rows past those at hand: the next call takes it
+                _pause(at, info, PH_STEP, t, h, k, io, n_steps, n_rej, n_ev, n_fev, n_start, h_min_seen, h_max_seen)
+                return io
             if hh < 1e-14 * max(1.0, abs(t)):
                 info[R_STATUS] = ST_STEP_TOO_SMALL
                 info[R_TIME] = t
@@ -579,11 +614,11 @@ def _integrate(minv, bvec, axial, rot, mult, params, cm, brk, pcoef, sig, t_out,
             if ev >= 0:
                 t_ev = t + x_ev * hh
                 # outputs before the reversal from this step's dense output
-                while io < n_out and t_out[io] < t_ev:
-                    x = (t_out[io] - t) / hh
+                while io < lim and t_out[io - io0] < t_ev:
+                    x = (t_out[io - io0] - t) / hh
                     for i in range(ny):
                         yo[i] = _dense(F, y, x, i)
-                    io = _write(io, yo, bvec, axial, rot, mult, params, s, up, gp, ap, wacc, ms, out_y, out_eu, out_ef, out_eh, n)
+                    io = _write(io - io0, yo, bvec, axial, rot, mult, params, s, up, gp, ap, wacc, ms, out_y, out_eu, out_ef, out_eh, n) + io0
                 # the state at the reversal from the step's dense output (7th order, within the
                 # step's tolerance: the step was accepted), not from the step redone to it
                 h_ev = t_ev - t
@@ -593,8 +628,8 @@ def _integrate(minv, bvec, axial, rot, mult, params, cm, brk, pcoef, sig, t_out,
                 for i in range(ny):
                     y[i] = y_ev[i]
                 _stops_at(y, bvec, axial, rot, params, ms, n)
-                while io < n_out and t_out[io] <= t:
-                    io = _write(io, y, bvec, axial, rot, mult, params, s, up, gp, ap, wacc, ms, out_y, out_eu, out_ef, out_eh, n)
+                while io < lim and t_out[io - io0] <= t:
+                    io = _write(io - io0, y, bvec, axial, rot, mult, params, s, up, gp, ap, wacc, ms, out_y, out_eu, out_ef, out_eh, n) + io0
                 # elements that reverse together (identical b and sets, or by chance within
                 # SIMULTANEOUS of the step) all start their new branches here
                 for e in range(ne):
@@ -608,16 +643,16 @@ def _integrate(minv, bvec, axial, rot, mult, params, cm, brk, pcoef, sig, t_out,
                     h_min_seen = min(h_min_seen, h_ev)
                 continue
             # ---- accept the whole step
-            while io < n_out and t_out[io] < t + hh:
+            while io < lim and t_out[io - io0] < t + hh:
                 if not have_dense:
                     _dense_coefficients(t, hh, y, y_new, f, f_new, k, brk, pcoef, sig, minv, bvec, axial, rot, mult, params,
                                         cm, s, up, gp, ms, p, A, C, D, K, F, ytmp)
                     n_fev += 3
                     have_dense = True
-                x = (t_out[io] - t) / hh
+                x = (t_out[io - io0] - t) / hh
                 for i in range(ny):
                     yo[i] = _dense(F, y, x, i)
-                io = _write(io, yo, bvec, axial, rot, mult, params, s, up, gp, ap, wacc, ms, out_y, out_eu, out_ef, out_eh, n)
+                io = _write(io - io0, yo, bvec, axial, rot, mult, params, s, up, gp, ap, wacc, ms, out_y, out_eu, out_ef, out_eh, n) + io0
             clipped = hh < h
             t = tb if hh == tb - t else t + hh
             for i in range(ny):
@@ -628,8 +663,8 @@ def _integrate(minv, bvec, axial, rot, mult, params, cm, brk, pcoef, sig, t_out,
             h_min_seen = min(h_min_seen, hh)
             h_max_seen = max(h_max_seen, hh)
             h = max(h, hh * factor) if clipped else hh * factor
-            while io < n_out and t_out[io] <= t:
-                io = _write(io, y, bvec, axial, rot, mult, params, s, up, gp, ap, wacc, ms, out_y, out_eu, out_ef, out_eh, n)
+            while io < lim and t_out[io - io0] <= t:
+                io = _write(io - io0, y, bvec, axial, rot, mult, params, s, up, gp, ap, wacc, ms, out_y, out_eu, out_ef, out_eh, n) + io0
             finite = True
             for i in range(n):
                 finite = finite and math.isfinite(y[i])
@@ -639,7 +674,10 @@ def _integrate(minv, bvec, axial, rot, mult, params, cm, brk, pcoef, sig, t_out,
                 return io
     # outputs left by round-off at the very end
     while io < n_out:
-        io = _write(io, y, bvec, axial, rot, mult, params, s, up, gp, ap, wacc, ms, out_y, out_eu, out_ef, out_eh, n)
+        if io >= lim:
+            _pause(at, info, PH_END, t, h, n_int, io, n_steps, n_rej, n_ev, n_fev, n_start, h_min_seen, h_max_seen)
+            return io
+        io = _write(io - io0, y, bvec, axial, rot, mult, params, s, up, gp, ap, wacc, ms, out_y, out_eu, out_ef, out_eh, n) + io0
     info[R_STATUS] = ST_OK
     info[R_STEPS] = n_steps
     info[R_REJECTED] = n_rej
@@ -649,6 +687,25 @@ def _integrate(minv, bvec, axial, rot, mult, params, cm, brk, pcoef, sig, t_out,
     info[R_HMAX] = h_max_seen
     info[R_START_FLIPS] = n_start
     return io
+
+
+@njit(cache=True, error_model="numpy", inline="always", _nrt=False)
+def _pause(at, info, phase, t, h, k, io, n_steps, n_rej, n_ev, n_fev, n_start, h_min_seen, h_max_seen):
+    """Where a call of _integrate stopped, for the next to go on from (dop853_layout: P_*)."""
+    at[P_PHASE] = phase
+    at[P_T] = t
+    at[P_H] = h
+    at[P_PIECE] = k
+    at[P_IO] = io
+    at[P_STEPS] = n_steps
+    at[P_REJECTED] = n_rej
+    at[P_EVENTS] = n_ev
+    at[P_FEV] = n_fev
+    at[P_START_FLIPS] = n_start
+    at[P_HMIN] = h_min_seen
+    at[P_HMAX] = h_max_seen
+    info[R_STATUS] = ST_PAUSED
+    info[R_TIME] = t
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
