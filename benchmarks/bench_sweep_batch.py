@@ -10,6 +10,9 @@ Sweeps (each ``rbhyst sweep FILE --workers W --no-plots`` in a process of its ow
 - ``0.2``: rbhyst 0.2 (``--old``: a Python whose rbhyst is 0.2; ``git worktree add`` of the
   tag and ``pip install`` into a venv of its own) on 0.2's seed deck: chang at exactly dt =
   1 ms, its estimate;
+- ``0.2-fine``: 0.2 at the compute step this tree chooses for the seed deck's case at scale 1
+  (dt = 0.125 ms, every 8th row written: the 1 ms rows), where chang meets 1 % as this tree's
+  chosen cases do: 0.2 at equal accuracy (a 0.2 user had to pick that step by hand);
 - ``fixed``: this tree on the same settings (``integrator = "chang"``: the same work as 0.2's
   case);
 - ``chosen``: this tree on its own seed deck (rbhyst chooses the compute step that meets
@@ -60,6 +63,13 @@ def old_deck_text() -> str:
     """0.2's seed deck (from git: the tag's decks/seed_wri.toml)."""
     return subprocess.run(["git", "-C", str(ROOT), "show", f"{OLD_TAG}:decks/seed_wri.toml"], check=True,
                           capture_output=True, text=True).stdout
+
+
+def old_fine_deck_text() -> str:
+    """0.2's seed deck at dt = 0.125 ms, every 8th row written."""
+    text = old_deck_text()
+    assert "\ndt = 0.001\n" in text and "\n[output]\n" in text
+    return text.replace("\ndt = 0.001\n", "\ndt = 0.000125\n").replace("\n[output]\n", "\n[output]\nevery = 8\n")
 
 
 def fixed_deck_text() -> str:
@@ -146,11 +156,11 @@ def main() -> None:
     ap.add_argument("--dask", action="store_true", help="also the chosen sweep on a local Dask cluster")
     ap.add_argument("--rounds", type=int, default=1,
                     help="run the sweeps this many times in turn (a shared machine's load then falls on all)")
-    ap.add_argument("--only", default=None, help="comma-separated: of 0.2, fixed, chosen, dask")
+    ap.add_argument("--only", default=None, help="comma-separated: of 0.2, 0.2-fine, fixed, chosen, dask")
     args = ap.parse_args()
     if not (args.records / "I-ELC270.AT2").is_file():
         sys.exit(f"{args.records}: no El Centro records there (--records)")
-    names = ["0.2"] * bool(args.old) + ["fixed", "chosen"] + ["dask"] * args.dask
+    names = ["0.2", "0.2-fine"] * bool(args.old) + ["fixed", "chosen"] + ["dask"] * args.dask
     if args.only:
         names = [x for x in names if x in args.only.split(",")]
     runs = names * args.rounds
@@ -161,7 +171,7 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
         shutil.copytree(DECK.parent / "records", folder / "records")  # (the decks' own records, overridden)
-        decks = {"0.2": old_deck_text if args.old else None, "fixed": fixed_deck_text, "chosen": DECK.read_text}
+        decks = {"0.2": old_deck_text, "0.2-fine": old_fine_deck_text, "fixed": fixed_deck_text, "chosen": DECK.read_text}
         cluster = None
         if "dask" in names:
             from distributed import LocalCluster
@@ -175,7 +185,7 @@ def main() -> None:
                     deck.write_text(decks[name]())
                 sweep = folder / f"{name}.toml"
                 sweep.write_text(sweep_text(deck, args.cases, args.records))
-                python, env = (args.old, os.environ.copy()) if name == "0.2" else (sys.executable, here)
+                python, env = (args.old, os.environ.copy()) if name.startswith("0.2") else (sys.executable, here)
                 r = timed_sweep(python, env, sweep, folder / name, args.workers,
                                 cluster.scheduler_address if name == "dask" else None)
                 r["per_s"] = args.cases / r["wall_s"]
@@ -183,9 +193,10 @@ def main() -> None:
                     results[name] = r
                 line = (f"{name:>6}: {r['wall_s']:8.1f} s, {r['per_s']:7.1f} cases/s, peak {r['peak_mb']:5.0f} MB "
                         f"({'the sweep; its Dask workers not counted' if name == 'dask' else 'the sweep and its workers'})")
-                if "0.2" in results and name != "0.2":
-                    line += f", {r['per_s'] / results['0.2']['per_s']:.2f} x 0.2's fastest cases/s so far"
-                if name != "0.2" and args.check and k < len(names):  # (the first round's)
+                for ref in ("0.2", "0.2-fine"):
+                    if ref in results and not name.startswith("0.2"):
+                        line += f", {r['per_s'] / results[ref]['per_s']:.2f} x {ref}'s fastest cases/s so far"
+                if not name.startswith("0.2") and args.check and k < len(names):  # (the first round's)
                     line += f"; {args.check} cases alone: peaks within {check_alone(sweep, folder / name, args.check):.2g}"
                 if name == "dask" and "chosen" in results:
                     a, b = journal_peaks(folder / "dask"), journal_peaks(folder / "chosen")

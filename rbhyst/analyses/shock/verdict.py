@@ -34,6 +34,7 @@ from rbhyst.analyses.qualification.verdict import (
 )
 from rbhyst.analyses.shock.drive import Drive, G, pulse_drive, record_drive
 from rbhyst.errors import InputError
+from rbhyst.solve.history import largest_abs
 from rbhyst.model.inputs import deck_inputs
 
 #: Q of the drive's shock response spectrum in shock.json and srs.csv (ISO 18431-4's usual)
@@ -233,14 +234,15 @@ def shock(deck, req: ShockRequest, folder: Path, integrator: str | None = None, 
         write_summary(result, folder / f"run_{run_folder(label)}" / "summary.json")
         runs.append((label, s))
         afters.append(after)
-        per_shock.append((result, label))
+        per_shock.append(window_peaks(result, drive))  # (not the rows: a run's table at a time)
+        del result
         if after.get("decayed") is False:
             notes.append(f"{label}: the response had not decayed {after['free_vibration_s']:.3g} s after the last "
                          "shock: its peaks are those of the time it ran")
     limits = SimpleNamespace(acceleration_limit_g=req.acceleration_limit_g, force_capacity_N=req.force_capacity_N,
                              axes=req.deck_axes, statistic="max")
     criteria = _criteria(deck, limits, runs)
-    shocks = [shock_peaks(result, drives[label[:-1]], [c["column"] for c in criteria]) for result, label in per_shock]
+    shocks = [shock_peaks(windows, [c["column"] for c in criteria]) for windows in per_shock]
     accuracy = _accuracy(runs, deck.analysis.warn_error)
     warnings = [f"{label}: {w}" for label, s in runs for w in s["warnings"]]
     passed = accuracy["pass"] and not warnings and all(c["pass"] for c in criteria)
@@ -318,15 +320,21 @@ def drive_facts(drive: Drive, srs, gap: float, file: str = DRIVE_FILE, srs_file:
     return facts
 
 
-def shock_peaks(result, drive: Drive, columns: list[str]) -> list[dict]:
-    """Each shock's own peak |value| of every column (its window: from the shock to the next), and
-    the largest change of a later shock's peak against the first's (the hysteresis carried over)."""
+def window_peaks(result, drive: Drive) -> list[tuple[float, dict]]:
+    """Each shock's own peak |value| of every column of ``result`` (its window: from the shock to
+    the next), as (the window's start, {column: peak}): what a run leaves once its rows are gone."""
     t = result.time
     out = []
     for lo, hi in drive.windows():
         inside = (t >= lo) & (t < hi)
-        out.append({"from_s": lo, "peaks": {c: float(np.max(np.abs(result.column(c)[inside]), initial=0.0))
-                                            for c in dict.fromkeys(columns)}})
+        out.append((lo, dict(zip(result.columns, map(float, largest_abs(result.table[inside]))))))
+    return out
+
+
+def shock_peaks(windows: list[tuple[float, dict]], columns: list[str]) -> list[dict]:
+    """Each shock's peaks of ``columns`` (window_peaks), and the largest change of a later shock's
+    peak against the first's (the hysteresis carried over)."""
+    out = [{"from_s": lo, "peaks": {c: peaks[c] for c in dict.fromkeys(columns)}} for lo, peaks in windows]
     first = out[0]["peaks"]
     # a column at rest (its peak below AT_REST of the largest in its unit: a cross response's
     # rounding) has no change worth saying
