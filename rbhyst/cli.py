@@ -678,9 +678,10 @@ def sweep(
             write_report(target)
     failed = outcome.failed
     took = time.perf_counter() - began
+    spent = f"{took:.3g} s" if took < 1000 else f"{took:.0f} s ({took / 60:.0f} min)"  # (not 3e+03 s)
     say(f"{outcome.ok} ok, {failed} failed; computed {outcome.computed}"
         + (f" on {outcome.where}" if outcome.computed else "")
-        + f", {outcome.reused} already in the folder; {took:.3g} s in all")
+        + f", {outcome.reused} already in the folder; {spent} in all")
     if failed:
         header, rows = outcome.table()
         i_status, i_msg = header.index("status"), header.index("message")
