@@ -28,6 +28,18 @@ CURVES = (("maximax", "maximax", "-"), ("positive", "positive", "--"), ("negativ
 
 
 @styled
+
+def _srs_axes(ax) -> None:
+    """An SRS's axes: log-log, natural frequency against peak absolute acceleration in g."""
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    plain_log_ticks(ax.xaxis)
+    plain_log_ticks(ax.yaxis)
+    ax.grid(True, which="both", alpha=0.25)
+    ax.set_xlabel("natural frequency [Hz]")
+    ax.set_ylabel("peak absolute acceleration [g]")
+    ax.legend(fontsize=7, loc="best")
+
 def plot_srs(srs: ShockSpectrum, path: Path, title: str = ""):
     """The SRS of every Q, g against Hz on log axes (returns the figure, saved to ``path``)."""
     fig, ax = subplots(figsize=(6.8, 4.8))
@@ -39,14 +51,7 @@ def plot_srs(srs: ShockSpectrum, path: Path, title: str = ""):
             shown = np.where(values > 0.0, values, np.nan)  # a zero has no place on a log axis
             ax.plot(f, shown, color=colour, ls=style, lw=1.6 if name == "maximax" else 1.0,
                     label=f"{label}, Q = {plain_number(q)}" if len(srs.qs) > 1 else label)
-    ax.set_xscale("log")
-    ax.set_yscale("log")
-    plain_log_ticks(ax.xaxis)
-    plain_log_ticks(ax.yaxis)
-    ax.grid(True, which="both", alpha=0.25)
-    ax.set_xlabel("natural frequency [Hz]")
-    ax.set_ylabel("peak absolute acceleration [g]")
-    ax.legend(fontsize=7, loc="best")
+    _srs_axes(ax)
     q = ", ".join(plain_number(v) for v in srs.qs)
     ax.set_title(f"Shock response spectrum{': ' + title if title else ''}\nQ = {q}", fontsize=9)
     save(fig, path)
@@ -203,14 +208,7 @@ def plot_srs_check(shocks, path: Path, band_db: tuple[float, float], title: str 
         out = ~s.within
         if out.any():
             ax.plot(f[out], s.srs[out] / G_STANDARD, "x", color="red", label=f"{s.axis}: outside the band")
-    ax.set_xscale("log")
-    ax.set_yscale("log")
-    plain_log_ticks(ax.xaxis)
-    plain_log_ticks(ax.yaxis)
-    ax.grid(True, which="both", alpha=0.25)
-    ax.set_xlabel("natural frequency [Hz]")
-    ax.set_ylabel("peak absolute acceleration [g]")
-    ax.legend(fontsize=7, loc="best")
+    _srs_axes(ax)
     ax.set_title(f"SRS check{': ' + title if title else ''}", fontsize=9)
     save(fig, path)
     return fig
