@@ -1217,19 +1217,24 @@ def qualify(
 
                 plot_verdict(v.checks, req.rrs, v.criteria, v.passed, tmp / "qualification.png",
                              title=d.title or "", notes=v.heading, space="x3" in req.axes)
-        if report:
-            from rbhyst.report.report_file import write_report
-
-            write_report(target)
-    for line in verdict_lines(v):
-        say(line)
-    say(f"wrote {target}")
-    if not v.passed:
-        raise typer.Exit(EXIT_VERDICT)
+        _verdict_said(target, report, verdict_lines(v), v.passed)
 
 
 #: ``rbhyst qualify``: the deck does not qualify
 EXIT_VERDICT = 1
+
+
+def _verdict_said(target: Path, report: bool, lines: list[str], passed: bool) -> None:
+    """The end of ``rbhyst qualify``: the folder's report if asked, the verdict's lines, exit 1 on a fail."""
+    if report:
+        from rbhyst.report.report_file import write_report
+
+        write_report(target)
+    for line in lines:
+        say(line)
+    say(f"wrote {target}")
+    if not passed:
+        raise typer.Exit(EXIT_VERDICT)
 
 
 def _shock_qualification(d, deck: Path, asked: dict, report: bool, out, plots: bool, run_options) -> bool:
@@ -1265,15 +1270,7 @@ def _qualify_shock(d, deck: Path, req, out, plots: bool, report: bool, integrato
                                                 encoding="utf-8")
         if plots and d.output.plots:
             _shock_plots(drives, made, tmp)
-    if report:
-        from rbhyst.report.report_file import write_report
-
-        write_report(target)
-    for line in verdict_lines(v):
-        say(line)
-    say(f"wrote {target}")
-    if not v.passed:
-        raise typer.Exit(EXIT_VERDICT)
+    _verdict_said(target, report, verdict_lines(v), v.passed)
 
 
 @app.command(cls=Command)
