@@ -1225,7 +1225,8 @@ EXIT_VERDICT = 1
 
 
 def _verdict_said(target: Path, report: bool, lines: list[str], passed: bool) -> None:
-    """The end of ``rbhyst qualify``: the folder's report if asked, the verdict's lines, exit 1 on a fail."""
+    """The end of a verdict's command (qualify, shock): the folder's report if asked, the verdict's
+    lines, exit 1 on a fail."""
     if report:
         from rbhyst.report.report_file import write_report
 
@@ -1342,11 +1343,7 @@ def shock(
                                  command=command_line(ctx))
             if plots and d.output.plots:
                 _shock_plots(drives, [], tmp)
-    for line in verdict_lines(v):
-        say(line)
-    say(f"wrote {target}")
-    if not v.passed:
-        raise typer.Exit(EXIT_VERDICT)
+    _verdict_said(target, False, verdict_lines(v), v.passed)
 
 
 def _shock_plots(drives: dict, made: list, folder: Path) -> None:
