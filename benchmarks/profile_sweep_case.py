@@ -22,6 +22,8 @@ import time
 from collections import defaultdict
 from pathlib import Path
 
+from bench_sweep_batch import sweep_text  # (the same sweep as the side-by-side's)
+
 ROOT = Path(__file__).resolve().parents[1]
 DECK = ROOT / "decks" / "seed_wri.toml"
 RECORDS = ROOT.parent / "shared" / "records"
@@ -52,19 +54,6 @@ class Phases:
         """``seconds`` of the phase ``out_of`` were ``name``'s (the kernel's own clock)."""
         self.s[name] += seconds
         self.s[out_of] -= seconds
-
-
-def sweep_text(n: int, records: Path, levels: int = 5, deck: Path = DECK) -> str:
-    """A sweep of about ``n`` cases of the seed deck: 8 s of El Centro at ``levels`` scale
-    factors (0.5 to 1.5) times n / levels values of body.mass (each case computed, none reused)."""
-    per = max(1, n // levels)
-    factors = ", ".join(repr(round(0.5 + k / max(1, levels - 1), 6)) for k in range(levels))
-    masses = ", ".join(repr(800.0 + 0.01 * k) for k in range(per))
-    return (f'deck = "{deck.as_posix()}"\n\n[[motions]]\nname = "elc"\n'
-            f'x1 = {{ file = "{(records / "I-ELC270.AT2").as_posix()}", units = "g" }}\n'
-            f'x2 = {{ file = "{(records / "I-ELC180.AT2").as_posix()}", units = "g" }}\n\n'
-            f'[scale]\nfactors = [{factors}]\n\n'
-            f'[vary]\n"analysis.duration" = [8.0]\n"body.mass" = [{masses}]\n')
 
 
 def instrument(ph: Phases) -> None:
@@ -115,7 +104,7 @@ def main() -> None:
             deck = Path(tmp) / "seed_fixed.toml"
             deck.write_text(DECK.read_text().replace('# integrator = "chang"', 'integrator = "chang"'))
             shutil.copytree(DECK.parent / "records", Path(tmp) / "records")
-        path.write_text(sweep_text(args.cases, args.records, deck=deck))
+        path.write_text(sweep_text(deck, args.cases, args.records))
         sw = load_sweep(path)
     base, todo = sw.base, [(c.key, c.values) for c in sw.cases]
     worker.run_batch(base, todo[:3])  # kernels loaded, records read
