@@ -194,10 +194,13 @@ class Estimator:
                         self._pieces = reference.load_pieces(self.system, self.t_end)
                     run = reference.Integration(self.system, n, lambda lo, hi: self.t[lo:hi], rtol, pieces=self._pieces,
                                                 max_steps=self.max_steps, window=VALUES_BLOCK, t_end=float(self.t[-1]))
+                    block = lambda lo, hi: run.take(hi).raw(self.system)  # noqa: E731
+                else:
+                    raw = whole.raw(self.system)
+                    block = lambda lo, hi: raw.slice(lo, hi)  # noqa: E731
                 for lo in range(0, n, VALUES_BLOCK):
-                    part = whole.raw(self.system).slice(lo, lo + VALUES_BLOCK) if whole is not None else \
-                        run.take(min(n, lo + VALUES_BLOCK)).raw(self.system)
-                    out[lo:lo + VALUES_BLOCK] = self.layout.table(part)[:, cols]
+                    hi = min(n, lo + VALUES_BLOCK)
+                    out[lo:hi] = self.layout.table(block(lo, hi))[:, cols]
             finally:
                 self.wall_s += time.perf_counter() - tic
             self._stats[key] = whole.stats if whole is not None else run.stats()

@@ -308,9 +308,9 @@ class Integration:
         while self._hi < hi:
             want = max(size, hi - self._hi)
             self._room(want)
-            at = self._hi - self._lo
+            off = self._hi - self._lo  # (where the rows after those kept go in the buffers)
             top = min(self.n_rows, self._hi + want)
-            t, y, eu, ef, eh = (b[at:at + top - self._hi] for b in self._buf)
+            t, y, eu, ef, eh = (b[off:off + top - self._hi] for b in self._buf)
             t[:] = self.times(self._hi, top)
             self.at[P_FIRST] = self._hi
             before = (self.at[P_T], self.at[P_PHASE])
