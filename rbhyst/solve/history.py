@@ -449,10 +449,19 @@ class PlotData:
         self.t_lo = np.full(nb, np.inf)
         self.t_hi = np.full(nb, -np.inf)
 
-    def update(self, table: np.ndarray, extremes: Extremes) -> None:
-        """Fold a chunk of rows into the buckets and into ``extremes`` (one compiled pass)."""
+    def update(self, table: np.ndarray, extremes: Extremes, folded: bool = False) -> None:
+        """Fold a chunk of rows into the buckets and into ``extremes`` (one compiled pass).
+        ``folded``: ``extremes`` has seen these rows already (the output rows of a step split
+        into compute steps, whose every row was folded): a run that draws nothing keeps only
+        the last row of them."""
         n = len(table)
         if n == 0:
+            return
+        if folded and not self.drawn:
+            # (folding a subset of the rows folded gives the same extremes: a copy of the
+            # strided rows and two passes over them saved)
+            self._seen += n
+            self.final = table[-1].copy()
             return
         # columns must be contiguous (the kernel runs down each); a block of rows of the run's
         # column-major table is, though not F-contiguous as a whole: no copy for it

@@ -109,8 +109,12 @@ class Rows:
         # the columns the error estimate compares (rbhyst.solve.estimate), at every compare_every-th
         # compute step: where a step of dt is split, its error between the rows is the run's too
         self._compare_columns = np.array([0] + [c for _, c, _ in estimate_columns(layout)])
-        self.compare_every = compare_every or compare_stride(layout, compute_steps if compute_steps is not None else n_steps)
-        self._compared: list[np.ndarray] = []
+        nodes = (compute_steps if compute_steps is not None else n_steps) + 1
+        self.compare_every = compare_every or compare_stride(layout, nodes - 1)
+        # (one array, column by column as the table, grown where more rows come than the run's
+        # compute nodes: each column copied once, contiguously, and no stack of them at the end)
+        self._compared = np.empty((len(self._compare_columns), -(-nodes // self.compare_every))).T
+        self._n_compared = 0
         self.spectra = None
         if spectra is not None:
             located = body_spectrum_columns(layout)
@@ -126,15 +130,14 @@ class Rows:
         table = self.layout.table(raw, out=self._kept[self._next:self._next + n] if direct else None)
         if self.spectra is not None:  # every compute step, whatever output.every writes
             self.spectra.update(table[:, self._spectrum_columns], self.dt / sub, table[:, 0])
-        first = (-self._node) % self.compare_every
-        self._compared.append(table[first::self.compare_every][:, self._compare_columns])
+        self._keep_compared(table)
         self._node += len(table)
         if sub > 1:
             # the peaks of the motion, not of the rows: a step of dt split to follow a record or
             # a pulse has its peaks between the rows
             fold_extremes(np.asfortranarray(table), self.extremes)
             table = table[sub - 1::sub]
-        self.plot.update(table, self.extremes)
+        self.plot.update(table, self.extremes, folded=sub > 1)
         first = (-self._next) % self.every
         written = table[first::self.every]
         if self._kept is not None and not direct:
@@ -144,6 +147,20 @@ class Rows:
             self._csv.add(written)
         self._next += len(table)
 
+    def _keep_compared(self, table: np.ndarray) -> None:
+        """The estimate's columns of every compare_every-th compute node of the chunk."""
+        first = (-self._node) % self.compare_every
+        picked = table[first::self.compare_every]
+        lo, hi = self._n_compared, self._n_compared + len(picked)
+        if hi > len(self._compared):
+            grown = np.empty((self._compared.shape[1], 2 * hi)).T
+            grown[:lo] = self._compared[:lo]
+            self._compared = grown
+        into = self._compared[lo:hi]
+        for j, c in enumerate(self._compare_columns):  # (a column of the table is contiguous)
+            into[:, j] = picked[:, c]
+        self._n_compared = hi
+
     def body_spectra(self):
         """The LocatedSpectra of G and the points over every row so far (None without output.spectra)."""
         return None if self.spectra is None else self.spectra.result()
@@ -152,7 +169,7 @@ class Rows:
     def compared(self) -> np.ndarray:
         """(n, 1 + columns): time and the estimate's columns (history.estimate_columns) at every
         compare_every-th compute step."""
-        return np.vstack(self._compared)
+        return self._compared[:self._n_compared]
 
     @property
     def csv_path(self):
