@@ -511,3 +511,39 @@ def test_a_response_of_rounding_is_said_to_be_at_rest(tmp_path):
             said = " ".join(t.get_text() for t in ax.texts)
             assert bool(visible) == drawn and said.startswith("at rest: ") != drawn, (k, said)
             assert ax.get_xlim()[1] >= 1.9  # (the run's 2 s, not matplotlib's empty 0-1)
+
+
+def test_ida_medians_are_each_combinations_own():
+    """plot_ida's medians and 84th percentiles, taken a matrix of equal-sized sets at a time,
+    equal numpy's of each combination's set at each level alone, to the bit: sets of 1-4
+    motions, a level where no motion has the peak (nan), a peak some motions lack."""
+    import random
+
+    from rbhyst.analyses.sweep.tables import PERCENTILE
+    from rbhyst.report.sweep import _groups, _medians
+
+    rng = random.Random(3)
+    cases = []
+    for k in range(40):
+        for s in (0.5, 1.0, 1.5):
+            for m in range(rng.randint(1, 4)):
+                peaks = {} if (k == 7 and s == 1.0) or rng.random() < 0.1 else {"peak_u1_m": rng.random()}
+                cases.append({"motion": f"m{m}", "scale": s, "status": "ok", "vary": {"body.mass": str(k)},
+                              "peaks": peaks})
+    groups = _groups(cases, ["body.mass"])
+    idents = sorted(groups)
+    for with_p84 in (True, False):
+        got = dict(_medians(groups, idents, "peak_u1_m", with_p84))
+        for ident in idents:
+            levels, med, p84 = got[ident]
+            assert levels == [0.5, 1.0, 1.5]
+            for s, m, p in zip(levels, med, p84 or [None] * 3):
+                x = np.array([c["peaks"]["peak_u1_m"] for c in groups[ident]
+                              if c["scale"] == s and "peak_u1_m" in c["peaks"]])
+                if len(x) == 0:
+                    assert np.isnan(m)
+                    continue
+                assert m == np.median(x)
+                if with_p84:
+                    assert p == np.percentile(x, PERCENTILE)
+    assert np.isnan(dict(_medians(groups, idents, "peak_u1_m", False))[("7",)][1][1])
