@@ -92,3 +92,22 @@ def test_a_sweep_of_fewer_finished_cases_writes_its_own_tables(project):
     assert not (out / "ida.png").exists()
     assert run_sweep(load_sweep(write_sweep(project, fewer)), workers=1).written
     assert (out / "ida.png").is_file()
+
+
+def test_the_outputs_sum_is_the_sha256_of_the_whole_json():
+    """outputs_sum's digest, its rows encoded one at a time, is the sha256 of the one JSON text
+    of everything (so a finished sweep of an earlier version stands): empty and long lists,
+    text to quote and escape, nested dicts to sort, inf and a set (repr) among them."""
+    import hashlib
+    import random
+
+    from rbhyst.analyses.sweep.uptodate import json_sum
+
+    rng = random.Random(0)
+    for trial in range(100):
+        rows = [[rng.random(), str(rng.random()), 'a,"b"\n', None, {"z": 1, "a": [1, 2.5]}, float("inf"), "é"]
+                for _ in range(rng.randint(0, 4))]
+        body = ["0.2.0", ["h", "é"], rows, [None, "ab"] * rng.randint(0, 2), ["k"], "factors", [0.5],
+                {"b": None, "a": "kg"}, None, False, {1, 2} if trial % 5 == 0 else True]
+        text = json.dumps(body, sort_keys=True, separators=(",", ":"), default=repr)
+        assert json_sum(body, long=(2, 3)) == hashlib.sha256(text.encode()).hexdigest()

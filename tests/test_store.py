@@ -126,3 +126,33 @@ def test_an_altered_histories_file_is_computed_again(project):
     said = notes(err)
     assert len(said) == 1 and f"its histories file {HISTORIES}/{name} was altered after it was written" in said[0]
     assert f"computed {sharing} on " in err and f"{8 - sharing} already" in err
+
+
+def test_the_cases_held_compact_are_the_cases_written(tmp_path):
+    """The store holds each case's numbers as Numbers (an array, the names shared with every case
+    of the same names): they read as the dicts written (None as None, not nan), their journal
+    lines and checksums are the dicts' byte for byte, a group holding anything but floats stays
+    a dict, and a journal read again gives the same entries."""
+    from rbhyst.analyses.sweep.store import Journal, Numbers, _entry_line
+
+    def entry(k: int) -> dict:
+        return {"key": f"{k:032x}", "status": "ok", "message": "", "wall_s": 0.5,
+                "peaks": {"u1": 0.001 * k, "R3": None, "at2": -0.0},
+                "energy": {"E_in_J": 1.5 + k}, "accuracy": {"u1": 1e-3, "n": 3},
+                "stroke": {}}
+
+    plain = [entry(k) for k in range(4)]
+    lines = [_entry_line(e) for e in plain]
+    sums = [line_sum(e) for e in plain]
+    journal = Journal(tmp_path / "out")
+    journal.add([entry(k) for k in range(4)])
+    journal.close()
+    for k, again in enumerate((journal.entries, Journal(tmp_path / "out").entries)):
+        held = list(again.values())
+        assert [_entry_line(e) for e in held] == lines and [line_sum(e) for e in held] == sums
+        for e, p in zip(held, plain):
+            assert isinstance(e["peaks"], Numbers) and isinstance(e["energy"], Numbers)
+            assert dict(e["peaks"]) == p["peaks"] and e["peaks"]["R3"] is None and e["peaks"].get("x") is None
+            assert str(e["peaks"]["at2"]) == "-0.0" and type(e["peaks"]["u1"]) is float
+            assert e["accuracy"] == p["accuracy"] and type(e["accuracy"]) is dict  # (an int in it: as it is)
+        assert held[0]["peaks"]._index is held[3]["peaks"]._index  # (one index of the names for all)

@@ -41,9 +41,10 @@ def write_plots(header: list[str], rows: list[list], vary_keys: list[str], scale
                 units: dict[str, str | None] | None = None) -> list[str]:
     """The plots that fit the sweep's axes, into ``folder``; returns their names. ``units``:
     the unit of each vary key (rbhyst.model.deck.key_unit), for the axes and legends."""
-    cases = _records(header, rows, vary_keys)
+    # (the peaks drawn only: a case's record of every peak took kilobytes at 10^5 cases)
+    quantities = _quantities(header, _filled(header, rows))
+    cases = _records(header, rows, vary_keys, quantities)
     ok = [c for c in cases if c["status"] == "ok"]
-    quantities = _quantities(header, ok)
     if not ok or not quantities:
         return []
     units = units or {}
@@ -64,18 +65,36 @@ def write_plots(header: list[str], rows: list[list], vary_keys: list[str], scale
     return written
 
 
-def _records(header, rows, vary_keys) -> list[dict]:
+def _filled(header, rows) -> set[str]:
+    """The peak columns that a finished case has a value of."""
     i = {h: k for k, h in enumerate(header)}
+    status = i["status"]
+    left = {h: k for h, k in i.items() if h.startswith("peak_")}
+    have = set()
+    for r in rows:
+        if not left:
+            break
+        if r[status] == "ok":
+            for h in [h for h, k in left.items() if r[k] != ""]:
+                have.add(h)
+                del left[h]
+    return have
+
+
+def _records(header, rows, vary_keys, peaks=None) -> list[dict]:
+    """Each row as {motion, scale, status, vary, peaks}, with the ``peaks`` named (every one)."""
+    i = {h: k for k, h in enumerate(header)}
+    wanted = [(h, k) for h, k in i.items() if h.startswith("peak_") and (peaks is None or h in peaks)]
     out = []
     for r in rows:
-        peaks = {h: float(r[k]) for h, k in i.items() if h.startswith("peak_") and r[k] != ""}
+        got = {h: float(r[k]) for h, k in wanted if r[k] != ""}
         out.append({"motion": r[i["motion"]], "scale": float(r[i["scale"]]), "status": r[i["status"]],
-                    "vary": {k: r[i[k]] for k in vary_keys}, "peaks": peaks})
+                    "vary": {k: r[i[k]] for k in vary_keys}, "peaks": got})
     return out
 
 
-def _quantities(header, ok) -> list[str]:
-    have = {p for c in ok for p in c["peaks"]}
+def _quantities(header, have: set[str]) -> list[str]:
+    """The peaks drawn, of those the finished cases have (``have``)."""
     chosen = [q for q in PREFERRED if q in have]
     return chosen or [h for h in header if h in have][:4]
 
