@@ -547,3 +547,19 @@ def test_ida_medians_are_each_combinations_own():
                 if with_p84:
                     assert p == np.percentile(x, PERCENTILE)
     assert np.isnan(dict(_medians(groups, idents, "peak_u1_m", False))[("7",)][1][1])
+
+
+def test_vary_medians_are_each_values_own():
+    """vary.png's median line, its sets of equal size taken a matrix at a time, is numpy's median
+    of the peaks at each value alone, to the bit (-0.0 among them)."""
+    from rbhyst.report.sweep import _median_at
+
+    rng = np.random.default_rng(0)
+    for t in range(200):
+        n = int(rng.integers(1, 60))
+        x = rng.choice(rng.random(int(rng.integers(1, 10))), n)
+        y = rng.random(n)
+        y[int(rng.integers(0, n))] = -0.0 if t % 3 == 0 else y[0]
+        xs, med = _median_at(x, y)
+        assert list(xs) == list(np.unique(x))
+        assert [repr(float(np.median(y[x == v]))) for v in xs] == [repr(m) for m in med]

@@ -345,9 +345,8 @@ def plot_vary(ok, quantities, keys, scale_label, path: Path, units: dict | None 
                 y = np.array([p[1] for p in pts])
                 colour = f"C{li % 10}"
                 ax.plot(x, y, "o", ms=3, alpha=0.45, color=colour)
-                xs = np.unique(x)
-                ax.plot(xs, [np.median(y[x == v]) for v in xs], "-", lw=1.8, color=colour,
-                        label=f"{scale_label} {s:g}: median")
+                xs, med = _median_at(x, y)
+                ax.plot(xs, med, "-", lw=1.8, color=colour, label=f"{scale_label} {s:g}: median")
             if ticks is not None:
                 ax.set_xticks(range(len(ticks)), ticks, rotation=20, fontsize=7)
             elif len(set(pos.values())) <= 8:  # at the values themselves, as the sweep gives them
@@ -360,6 +359,21 @@ def plot_vary(ok, quantities, keys, scale_label, path: Path, units: dict | None 
     fig.suptitle("Peak response against the varied values (points: every case; lines: median over the rest)")
     save(fig, path)
     return fig
+
+
+def _median_at(x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, list[float]]:
+    """Each distinct x (ascending) and the median of the y at it: the sets of equal size a matrix
+    at a time, a row each (a call per value took a second at 2,000 values)."""
+    xs, which = np.unique(x, return_inverse=True)
+    order = np.argsort(which, kind="stable")
+    bounds = np.searchsorted(which[order], np.arange(len(xs) + 1))
+    sizes = np.diff(bounds)
+    med = np.empty(len(xs))
+    for n in np.unique(sizes):
+        at = np.flatnonzero(sizes == n)
+        rows = order[bounds[at][:, None] + np.arange(n)[None, :]]
+        med[at] = np.median(y[rows], axis=1)
+    return xs, med.tolist()
 
 
 @styled
