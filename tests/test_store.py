@@ -133,7 +133,7 @@ def test_the_cases_held_compact_are_the_cases_written(tmp_path):
     of the same names): they read as the dicts written (None as None, not nan), their journal
     lines and checksums are the dicts' byte for byte, a group holding anything but floats stays
     a dict, and a journal read again gives the same entries."""
-    from rbhyst.analyses.sweep.store import Journal, Numbers, _entry_line
+    from rbhyst.analyses.sweep.store import Journal, Numbers, _entry_line, kept_sum
 
     def entry(k: int) -> dict:
         return {"key": f"{k:032x}", "status": "ok", "message": "", "wall_s": 0.5,
@@ -150,6 +150,7 @@ def test_the_cases_held_compact_are_the_cases_written(tmp_path):
     for k, again in enumerate((journal.entries, Journal(tmp_path / "out").entries)):
         held = list(again.values())
         assert [_entry_line(e) for e in held] == lines and [line_sum(e) for e in held] == sums
+        assert [kept_sum(e) for e in held] == sums  # (the sum the journal keeps: what outputs_sum takes)
         for e, p in zip(held, plain):
             assert isinstance(e["peaks"], Numbers) and isinstance(e["energy"], Numbers)
             assert dict(e["peaks"]) == p["peaks"] and e["peaks"]["R3"] is None and e["peaks"].get("x") is None

@@ -73,19 +73,35 @@ class Numbers(Mapping):
     def __len__(self) -> int:
         return len(self._index)
 
+    def items(self) -> list[tuple[str, float | None]]:
+        """(name, value) of every number, in their order (a list: Mapping's view asks for each
+        value by its name)."""
+        return [(k, None if v != v else v) for k, v in zip(self._index, self._values)]
+
 
 def compact(entry: dict, names: dict[tuple, dict[str, int]]) -> dict:
     """``entry`` with each group of floats (or None) as Numbers, in place; ``names``: the name
     indexes met so far, shared (a group holding anything else stays as it is)."""
     for g in GROUPS:
         d = entry.get(g)
-        if type(d) is dict and all(v is None or type(v) is float for v in d.values()):
-            key = tuple(d)
-            index = names.get(key)
-            if index is None:
-                index = names[key] = {k: i for i, k in enumerate(key)}
-            entry[g] = Numbers(index, array("d", (math.nan if v is None else v for v in d.values())))
+        if type(d) is not dict:
+            continue
+        values = list(d.values())
+        kinds = set(map(type, values))
+        if not kinds <= _FLOAT_OR_NONE:
+            continue
+        if _NONE in kinds:
+            values = [math.nan if v is None else v for v in values]
+        key = tuple(d)
+        index = names.get(key)
+        if index is None:
+            index = names[key] = {k: i for i, k in enumerate(key)}
+        entry[g] = Numbers(index, array("d", values))
     return entry
+
+
+_NONE = type(None)
+_FLOAT_OR_NONE = {float, _NONE}
 
 
 def _plain(value):
@@ -93,6 +109,12 @@ def _plain(value):
     if isinstance(value, Numbers):
         return dict(value.items())
     raise TypeError(f"Object of type {type(value).__name__} is not JSON serializable")
+
+
+def kept_sum(entry: dict) -> str:
+    """An entry's line_sum, as the journal wrote or read it (where it did: else worked out)."""
+    known = entry.get(SUM)
+    return known if known is not None else line_sum(entry)
 
 
 def line_sum(entry: dict) -> str:
@@ -273,11 +295,13 @@ class Journal:
     def add(self, entries: list[dict]) -> None:
         """Append finished cases, whole lines only, and flush them to the file."""
         self.open()
+        for e in entries:
+            e.pop(SUM, None)  # (a case computed again: its sum is its new content's)
         text = b"".join(_entry_line(e) for e in entries)
         with signals_held(), self.space():
             self._fh.write(text)
             self._fh.flush()
-        for e in entries:  # (kept compact: the caller's dicts too, in place)
+        for e in entries:  # (kept compact, with the sum its line carries: the caller's dicts too, in place)
             self.entries[e["key"]] = compact(e, self._names)
 
     def close(self) -> None:
@@ -352,7 +376,9 @@ def _mark_line() -> bytes:
 
 
 def _entry_line(entry: dict) -> bytes:
-    return (json.dumps({**entry, SUM: line_sum(entry)}, allow_nan=False, default=_plain) + "\n").encode()
+    """The journal's line of an entry, its sum in it; the entry keeps the sum too (kept_sum)."""
+    entry[SUM] = line_sum(entry)
+    return (json.dumps(entry, allow_nan=False, default=_plain) + "\n").encode()
 
 
 def _marked(path: Path, formats=_FORMATS) -> bool:

@@ -15,7 +15,7 @@ import json
 from pathlib import Path
 
 from rbhyst._version import __version__
-from rbhyst.analyses.sweep.store import line_sum
+from rbhyst.analyses.sweep.store import kept_sum
 
 #: sweep.json's keys for what its files were made from and which files they are
 OUTPUTS_SUM, OUTPUT_FILES = "outputs_sha256", "files"
@@ -24,7 +24,7 @@ OUTPUTS_SUM, OUTPUT_FILES = "outputs_sha256", "files"
 def outputs_sum(outcome, table: tuple[list[str], list[list]], units: dict, histories: bool, plots: bool) -> str:
     """The sha256 of everything a sweep's files are made from (the module docstring)."""
     sweep = outcome.sweep
-    sums = [line_sum(outcome.results[c.key]) if c.key in outcome.results else None for c in sweep.cases]
+    sums = [kept_sum(outcome.results[c.key]) if c.key in outcome.results else None for c in sweep.cases]
     fragility = sweep.fragility.about() if sweep.fragility is not None else None
     body = [__version__, table[0], table[1], sums, sweep.vary_keys, sweep.scale_kind, sweep.levels, units,
             fragility, histories, plots]
