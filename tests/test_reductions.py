@@ -72,13 +72,18 @@ def test_the_neglected_terms_are_numpy_s_to_rounding():
         exact = scale < 0.01  # (numpy's sin(theta) - theta and cos(theta) - 1 lose their digits)
         s = np.array([sin_minus_x(x) for x in theta]) if exact else np.sin(theta) - theta
         m = np.array([cos_minus_one(x) for x in theta]) if exact else np.cos(theta) - 1.0
-        top = np.empty(8)
-        dr = kernel("neglected_terms")(theta, a, b, forces, top)
+        top, along = np.empty(8), np.empty(2)
+        ra, rb = rng.normal(size=2) * 1e5, rng.normal(size=2) * 1e3
+        dr = kernel("neglected_terms")(theta, a, b, forces, top, ra, rb, along)
         want = np.abs(a[:, None] * s[None, :] + b[:, None] * m[None, :]).max(axis=1)
         assert np.allclose(top, want, rtol=1e-12, atol=0), scale
         want_r = np.abs(m * (forces @ a) - (theta + s) * (forces @ b)).max()
         assert abs(dr - want_r) <= 1e-12 * want_r, scale
-    assert kernel("neglected_terms")(theta[:0], a, b, forces[:0], top) == 0.0 and not top.any()
+        want_axes = np.abs(ra[:, None] * s[None, :] + rb[:, None] * m[None, :]).max(axis=1)
+        assert np.allclose(along, want_axes, rtol=1e-12, atol=0), scale
+    along[:] = 1.0
+    assert kernel("neglected_terms")(theta[:0], a, b, forces[:0], top, ra, rb, along) == 0.0
+    assert not top.any() and not along.any()
 
 
 def sin_minus_x(x: float) -> float:

@@ -191,6 +191,25 @@ def test_a_record_in_cm_s2_declared_as_g_is_named(tmp_path):
     assert line.startswith("warning: excitation.support.x1: peak 392 g") and "a signal in cm/s2 declared as g?" in line
 
 
+def test_a_scaled_record_s_velocity_change_is_its_own_samples(tmp_path):
+    """A record is read once and scaled per run: the velocity change the unit check judges is
+    the scaled record's own (its samples integrated, their linear baseline removed), taken from
+    the record's once, for any scale, negative ones too."""
+    from rbhyst.model.records import Series
+    from rbhyst.model.system import assemble
+
+    code, err = invoke("make-record", tmp_path / "eq.csv", "--duration", "10", "--pga", "0.4", "--units", "g",
+                       "--seed", "3")
+    assert code == 0, err
+    for scale in (1.0, 2.5, -0.3):
+        data = one_square(tmp_path, {"support": {"x1": {"file": "eq.csv", "units": "g", "scale": scale}}})
+        deck = rbhyst.load_deck(write_deck(tmp_path, data))
+        signal = assemble(deck, deck.base).excitation.ag1
+        own = Series(signal.t0, signal.dt, np.array(signal.values))  # (the same samples, no record behind them)
+        assert 0.1 < own.velocity_change < 5.0
+        assert signal.velocity_change == pytest.approx(own.velocity_change, rel=1e-12, abs=0.0), scale
+
+
 def test_a_shock_of_hundreds_of_g_is_not_a_unit_mistake(tmp_path):
     """500 g for 0.5 ms (a pyroshock's level): 1.6 m/s of velocity change, a real test."""
     data = one_square(tmp_path, {"support": {"x2": {"type": "half-sine", "amplitude": 500.0, "units": "g",

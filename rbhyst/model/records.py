@@ -60,6 +60,33 @@ class Series:
         """Linear interpolation; zero outside the record (free vibration after it ends)."""
         return np.interp(t, self.times, self.values, left=0.0, right=0.0)
 
+    @functools.cached_property
+    def velocity_change(self) -> float:
+        """The largest change of velocity the samples make over their span (value units times
+        seconds): their trapezoidal integral with its linear baseline removed (a record's small
+        offset drifts over a long record)."""
+        a = np.asarray(self.values, dtype=float)
+        if len(a) < 2:
+            return 0.0
+        v = np.concatenate([[0.0], np.cumsum(0.5 * (a[1:] + a[:-1]) * self.dt)])
+        t = np.arange(len(v), dtype=float)
+        v = v - np.polyval(np.polyfit(t, v, 1), t)
+        return float(np.max(np.abs(v)))
+
+
+@dataclass(frozen=True)
+class ScaledSeries(Series):
+    """A record's samples times ``factor`` (its units' to SI, times the deck's scale): a record is
+    read once per process and scaled per run, so what is linear in its samples is taken from
+    the record itself (``of``), once."""
+
+    of: Series | None = None
+    factor: float = 1.0
+
+    @functools.cached_property
+    def velocity_change(self) -> float:
+        return abs(self.factor) * self.of.velocity_change if self.of is not None else super().velocity_change
+
 
 @dataclass(frozen=True)
 class RecordFile:

@@ -22,7 +22,7 @@ from rbhyst.model.coordinates import PLANE, Coordinate, translations
 from rbhyst.model.hysteresis import limiting_slope, reversal_stiffness, virgin_tangent
 from rbhyst.files.units import check_declared
 from rbhyst.model.points import point_matrix
-from rbhyst.model.records import Series, read_record
+from rbhyst.model.records import ScaledSeries, Series, read_record
 
 Signal = Callable[[np.ndarray], np.ndarray]
 
@@ -700,7 +700,8 @@ def _signal(spec, scale_units: dict[str, float], base: Path,
         notes.append(f"{path.name}: its time column starts at {record.series.t0:g} s: the support is at rest (zero "
                      f"acceleration) before it, as the analysis starts at 0 s with every signal; shift the "
                      f"file's times if it should start at 0")
-    series = Series(record.series.t0, record.series.dt, record.series.values * factor * spec.scale)
+    series = ScaledSeries(record.series.t0, record.series.dt, record.series.values * factor * spec.scale,
+                          of=record.series, factor=factor * spec.scale)
     return series, series.duration
 
 

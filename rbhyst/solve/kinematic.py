@@ -187,10 +187,20 @@ def model_residual(result, start: float) -> tuple[float, str]:
     k0 = system.expand(system.k0[None, :])[0]
     forces = rows[:, [columns[f"e{k}_f"] for k in range(1, len(b3) + 1)]]
     best, where = 0.0, ""
+    # the forces' resultant: where the elements' first-order deformations cancel in it (a body
+    # rocking on mounts either side of G), the second-order ones they neglect do not. Each
+    # element's neglected force (b3 s + c m) k_rev along its direction, summed: s A + m B at
+    # every row, A and B the elements' sums (k_rev: the stiffest tangent, the reversal's, as a
+    # mount cycling about a point is that stiff)
+    angles = np.radians([el.angle_deg for el in system.elements for _ in range(el.count)])
+    directions = np.column_stack([np.cos(angles), np.sin(angles)])
+    k_rev = system.expand(system.k_reversal[None, :])[0]
+    along_a, along_b = (b3 * k_rev) @ directions, (c * k_rev) @ directions
     # each element's deformation error against its deformation (its force over k0: the rows
-    # compare forces, not deformations), and the moment resultant's, in one compiled pass
-    du = np.empty(len(b3))
-    dr = kernel("neglected_terms")(theta, b3, c, np.ascontiguousarray(forces), du)
+    # compare forces, not deformations), the moment resultant's and the forces' resultant's
+    # along each axis, in one compiled pass over the rows
+    du, dr_axes = np.empty(len(b3)), np.empty(2)
+    dr = kernel("neglected_terms")(theta, b3, c, np.ascontiguousarray(forces), du, along_a, along_b, dr_axes)
     scale = largest_abs(forces) / np.maximum(k0, 1e-300)
     with np.errstate(divide="ignore", invalid="ignore"):
         share = np.where(scale > 0, du / scale, 0.0)
@@ -200,24 +210,14 @@ def model_residual(result, start: float) -> tuple[float, str]:
     top = float(largest_abs(rows[:, [columns[key]]])[0])
     if top > 0 and dr / top > best:
         best, where = float(dr / top), key
-    # the forces' resultant: where the elements' first-order deformations cancel in it (a body
-    # rocking on mounts either side of G), the second-order ones they neglect do not. Each
-    # element's neglected force (b3 s + c m) k_rev along its direction, summed: s A + m B at
-    # every row, A and B the elements' sums (k_rev: the stiffest tangent, the reversal's, as a
-    # mount cycling about a point is that stiff), without a (rows, elements) array
-    angles = np.radians([el.angle_deg for el in system.elements for _ in range(el.count)])
-    directions = np.column_stack([np.cos(angles), np.sin(angles)])
-    k_rev = system.expand(system.k_reversal[None, :])[0]
-    s, m = small_angle_terms(theta)
-    a, b = (b3 * k_rev) @ directions, (c * k_rev) @ directions
-    dr = np.array([float(np.max(np.abs(s * a[d] + m * b[d]))) if len(theta) else 0.0 for d in range(2)])
-    share_r, key_r = resultant_share(dr, rows, columns, system)
+    share_r, key_r = resultant_share(dr_axes, rows, columns, system)
     if share_r > best:
         best, where = share_r, key_r
+    turn = float(np.max(np.abs(theta))) if len(theta) else 0.0
     for name, x in layout.points:
         keys = [k for k in columns if k.startswith(f"{name}_") and k[len(name) + 1:].startswith("u")]
         top = max(np.max(np.abs(rows[:, columns[k]])) for k in keys) if keys else 0.0
-        miss = float(np.hypot(*x[:2])) * float(np.max(np.abs(theta))) ** 2 / 2
+        miss = float(np.hypot(*x[:2])) * turn ** 2 / 2
         if top > 0 and miss / top > best:
             best, where = miss / top, keys[0]
     return best, where
@@ -298,22 +298,6 @@ def resultant_share(dr: np.ndarray, rows: np.ndarray, columns: dict, system) -> 
         share = np.where(scales > 0, dr / scales, 0.0)
     j = int(np.argmax(share))
     return float(share[j]), keys[j]
-
-
-def small_angle_terms(theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """(sin(theta) - theta, cos(theta) - 1) at every theta, by their series where |theta| <= 0.25
-    as the compiled pass takes them (kernels.reduce.neglected_terms): in floating point
-    sin(theta) - theta loses the digits of theta (half of them at 1e-4 rad)."""
-    q = theta * theta
-    s = -theta * q * (1.0 / 6.0) * (1.0 - q * (1.0 / 20.0) * (1.0 - q * (1.0 / 42.0) * (
-        1.0 - q * (1.0 / 72.0) * (1.0 - q * (1.0 / 110.0) * (1.0 - q * (1.0 / 156.0))))))
-    m = -q * 0.5 * (1.0 - q * (1.0 / 12.0) * (1.0 - q * (1.0 / 30.0) * (1.0 - q * (1.0 / 56.0) * (
-        1.0 - q * (1.0 / 90.0) * (1.0 - q * (1.0 / 132.0))))))
-    large = q > 0.0625
-    if large.any():
-        s[large] = np.sin(theta[large]) - theta[large]
-        m[large] = np.cos(theta[large]) - 1.0
-    return s, m
 
 
 #: a rotation below this (rad) is rounding (a nanometre at a metre): small and exact kinematics

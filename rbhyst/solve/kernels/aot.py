@@ -82,7 +82,7 @@ EXPORTS = {
                        "f8[::1], f8[:,::1])"),
     "resultant": ("rbhyst.solve.kernels.reduce", "resultant", "void(f8[:,:], f8[:,::1], f8[:,:])"),
     "neglected_terms": ("rbhyst.solve.kernels.reduce", "neglected_terms",
-                        "f8(f8[::1], f8[::1], f8[::1], f8[:,::1], f8[::1])"),
+                        "f8(f8[::1], f8[::1], f8[::1], f8[:,::1], f8[::1], f8[::1], f8[::1], f8[::1])"),
     "static_update": ("rbhyst.solve.kernels.elements", "static_update",
                       "void(f8[:,::1], f8[::1], i8, f8[::1], f8[:,:,::1], f8[::1], f8[:,:,::1], i8, f8[:,::1], "
                       "f8[::1], f8[:,::1], f8[::1])"),

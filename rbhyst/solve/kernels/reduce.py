@@ -63,19 +63,24 @@ def reduce_rows(table, first, bucket, hi, t_hi, lo, t_lo, b_lo, b_hi, bt_lo, bt_
 
 
 @njit(cache=True, error_model="numpy", _nrt=False)
-def neglected_terms(theta, a, b, forces, top):
+def neglected_terms(theta, a, b, forces, top, ra, rb, rtop):
     """The terms the seed's small rotations neglect along a run's rows (rbhyst.solve.kinematic.
     model_residual), in one pass: top[e] = max_t |a[e] s + b[e] m| (each element's deformation:
     a = b3, b = its axial offset), and the return value max_t |m sum_e f_e a_e - sin(theta)
     sum_e f_e b_e| (the moment resultant's; forces (rows, elements)), s = sin(theta) - theta,
-    m = cos(theta) - 1 at each row's theta.
+    m = cos(theta) - 1 at each row's theta; and rtop[d] = max_t |ra[d] s + rb[d] m| (the forces'
+    resultant along each deck axis d: the elements' neglected deformations at their stiffness,
+    summed, ra and rb those sums).
 
     s and m by their series where |theta| <= 0.25 (the terms left out below 1e-15 of the sum):
     sin(theta) - theta in floating point loses the digits of theta (half of them at 1e-4 rad),
     and numpy's sin and cos were most of the check's time."""
     ne = a.shape[0]
+    nr = ra.shape[0]
     for e in range(ne):
         top[e] = 0.0
+    for d in range(nr):
+        rtop[d] = 0.0
     worst = 0.0
     for t in range(theta.shape[0]):
         th = theta[t]
@@ -100,6 +105,10 @@ def neglected_terms(theta, a, b, forces, top):
         r = abs(m * fa - (th + s) * fb)
         if r > worst:
             worst = r
+        for d in range(nr):
+            v = abs(s * ra[d] + m * rb[d])
+            if v > rtop[d]:
+                rtop[d] = v
     return worst
 
 
