@@ -683,7 +683,7 @@ def sweep(
         + (f" on {outcome.where}" if outcome.computed else "")
         + f", {outcome.reused} already in the folder; {spent} in all")
     if failed:
-        header, rows = outcome.table()
+        header, rows = outcome.case_rows()
         i_status, i_msg = header.index("status"), header.index("message")
         bad = [r for r in rows if r[i_status] == "failed"]
         for r in bad[:5]:

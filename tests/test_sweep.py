@@ -1037,6 +1037,33 @@ def test_a_group_of_one_case_repeats_its_cases_csv_cells_only_where_numpy_would(
     assert b"peak_u1_m,1,0,0.0,0.0,-0.0,-0.0" in computed and b"peak_u1_m,1,0,inf,inf,nan,inf" in computed
 
 
+def test_cases_csv_rows_held_as_lines_are_the_csv_module_s(tmp_path):
+    """cases.csv's rows are held as their lines of text (tables.CaseRows) until the files are
+    written: the file is the bytes of the csv module's rows, and every row, taken by index, by
+    slice or in turn, reads back as the cells it was made from, a message with a comma, a quote
+    or a line break among them."""
+    from rbhyst.analyses.sweep.cases import Case, format_value
+    from rbhyst.analyses.sweep.tables import CaseRows, cases_table, to_csv, write_case_rows
+
+    titles = ["a,b", 'say "x"', "two\nlines", "", " lead", "plain", "é"]
+    cases = [Case(k + 1, f"m{k % 2}", 0.5 + k, 1.0, {"title": v}, {}, f"{k:032x}") for k, v in enumerate(titles)]
+    results = {c.key: {"key": c.key, "status": "ok", "message": titles[-1 - k] if k % 3 else "",
+                       "peaks": {"u1_m": 0.1 * c.number, "e1_f_N": -0.0}, "energy": {"E_in_J": 3}}
+               for k, c in enumerate(cases)}
+    results[cases[2].key] = {"key": cases[2].key, "status": "failed", "message": "diverged, at 1.2 s"}
+    header, rows = cases_table(cases, ["title"], results)
+    assert isinstance(rows, CaseRows) and len(rows) == len(cases)
+    cells = [[c.number, c.motion, repr(c.scale), format_value(c.vary["title"]),
+              results[c.key]["status"], results[c.key]["message"]] for c in cases]
+    assert [r[:6] for r in rows] == cells
+    assert [rows[i] for i in range(len(rows))] == list(rows) == rows[:]
+    assert rows[2][6:] == [""] * (len(header) - 6) and rows[0][header.index("peak_e1_f_N")] == "-0.0"
+    write_case_rows(tmp_path / "cases.csv", header, rows)
+    assert (tmp_path / "cases.csv").read_bytes() == to_csv(header, list(rows)).encode("utf-8")
+    with open(tmp_path / "cases.csv", encoding="utf-8", newline="") as fh:
+        assert list(csv.reader(fh)) == [header, *[[str(r[0]), *r[1:]] for r in rows]]
+
+
 def test_stats_numbers_are_each_value_s_own_repr():
     """stats.csv formats a group's mean, median, p84 and max once where they are equal, and
     never writes -0.0 as 0.0 (nor 0.0 as -0.0)."""

@@ -18,7 +18,8 @@ from rbhyst.files.outdir import MANIFEST, read_manifest, staged_directory
 from rbhyst.analyses.sweep.backends import WorkerLost
 from rbhyst.analyses.sweep.cases import Sweep
 from rbhyst.analyses.sweep.store import Journal
-from rbhyst.analyses.sweep.tables import PERCENTILE, cases_table, peak_cells, write_csv, write_stats
+from rbhyst.analyses.sweep.tables import (PERCENTILE, CaseRows, cases_table, peak_cells, write_case_rows,
+                                          write_stats)
 from rbhyst.analyses.sweep.uptodate import OUTPUT_FILES, OUTPUTS_SUM, outputs_sum, standing
 
 #: the files a sweep writes into its folder (beside its own .rbhyst-sweep/)
@@ -71,7 +72,12 @@ class Outcome:
         return [c.number for c in self.sweep.cases if self.results.get(c.key, {}).get("killed")]
 
     def table(self) -> tuple[list[str], list[list]]:
-        """cases.csv's header and rows."""
+        """cases.csv's header and rows (each a list of its cells)."""
+        header, rows = self.case_rows()
+        return header, list(rows)
+
+    def case_rows(self) -> tuple[list[str], CaseRows]:
+        """cases.csv's header and rows, each row held as its line of text (tables.CaseRows)."""
         return cases_table(self.sweep.cases, self.sweep.vary_keys, self.results)
 
 
@@ -200,7 +206,7 @@ def _still_to_compute(sweep: Sweep, journal: Journal, save_histories: bool, outc
 def _made_from(outcome: Outcome, save_histories: bool, plotter) -> tuple[str, tuple, dict]:
     """(the sha256 of what the files are made from, cases.csv's header and rows, the varied
     keys' units): what a finished sweep compares with its sweep.json before writing again."""
-    table = outcome.table()
+    table = outcome.case_rows()
     units = _vary_units(outcome.sweep)
     return outputs_sum(outcome, table, units, save_histories, plotter is not None), table, units
 
@@ -360,7 +366,7 @@ def _write_files(outcome: Outcome, journal: Journal, save_histories: bool, plott
     sweep = outcome.sweep
     made_from, (header, rows), units = made
     with staged_directory(outcome.out) as tmp:
-        write_csv(tmp / CASES_CSV, header, rows)
+        write_case_rows(tmp / CASES_CSV, header, rows)
         write_stats(tmp / STATS_CSV, sweep.cases, sweep.vary_keys, outcome.results,
                     known=peak_cells(header, rows, sweep.cases))
         if save_histories:

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import csv
 import io
-from collections.abc import Iterable, Iterator
+from collections.abc import Iterable, Iterator, Mapping, Sequence
 
 import numpy as np
 
@@ -44,7 +44,42 @@ def case_status(case: Case, entry: dict | None) -> tuple[str, str]:
     return entry["status"], entry.get("message") or ""
 
 
-def cases_table(cases: list[Case], vary_keys: list[str], results: dict[str, dict]) -> tuple[list[str], list[list]]:
+class CaseRows(Sequence):
+    """cases.csv's rows, each held as its line (the text Python's csv module writes for it, without
+    the line ending) and read back into its cells where it is taken: a row of some 70 cells held
+    as a list of strings took 4-5 kB, its line about 1.3 (a sweep of 10^5 cases keeps them all
+    until its files are written). A row reads back as it was made: the case's number an int, every
+    other cell its text."""
+
+    def __init__(self, lines: list[str]):
+        self.lines = lines
+
+    def __len__(self) -> int:
+        return len(self.lines)
+
+    def __getitem__(self, i):
+        if isinstance(i, slice):
+            return list(_cells(self.lines[i]))
+        return next(_cells([self.lines[i]]))
+
+    def __iter__(self) -> Iterator[list]:
+        return _cells(self.lines)
+
+
+def _cells(lines: Iterable[str]) -> Iterator[list]:
+    for row in csv.reader(lines):
+        row[0] = int(row[0])
+        yield row
+
+
+def write_case_rows(path, header: list[str], rows: CaseRows) -> None:
+    """cases.csv from its header and rows: the bytes of ``to_csv(header, list(rows))``."""
+    with open(path, "w", encoding="utf-8", newline="") as fh:
+        fh.write(_csv_text(header) + "\n")
+        fh.writelines(line + "\n" for line in rows.lines)
+
+
+def cases_table(cases: list[Case], vary_keys: list[str], results: dict[str, dict]) -> tuple[list[str], CaseRows]:
     """cases.csv: header and rows (one per case, in the sweep's order)."""
     entries = [None if c.problem else results.get(c.key) for c in cases]
     columns = result_columns(entries)
@@ -52,7 +87,9 @@ def cases_table(cases: list[Case], vary_keys: list[str], results: dict[str, dict
     # each group's keys -> their cells (a case has the numbers of its groups; the others empty)
     where = {g: {c[len(prefix):]: i for i, c in enumerate(columns) if c.startswith(prefix)}
              for g, prefix in _PREFIX.items()}
-    rows = []
+    lines = []
+    buf = io.StringIO()
+    writer = csv.writer(buf, lineterminator="\n")  # (one writer, its line taken row by row)
     for c, e in zip(cases, entries):
         status, message = case_status(c, e)
         cells = [""] * len(columns)
@@ -60,10 +97,13 @@ def cases_table(cases: list[Case], vary_keys: list[str], results: dict[str, dict
             for g, at in where.items():
                 for k, v in (e.get(g) or {}).items():
                     cells[at[k]] = _num(v)
-        rows.append([c.number, c.motion, _num(c.scale),
-                     *[format_value(c.vary[k]) if k in c.vary else "" for k in vary_keys],
-                     status, message, *cells])
-    return header, rows
+        writer.writerow([c.number, c.motion, _num(c.scale),
+                         *[format_value(c.vary[k]) if k in c.vary else "" for k in vary_keys],
+                         status, message, *cells])
+        lines.append(buf.getvalue()[:-1])
+        buf.seek(0)
+        buf.truncate()
+    return header, CaseRows(lines)
 
 
 STATS_HEADER = ("scale", "peak", "count", "failed", "mean", "median", "p84", "max")
@@ -82,7 +122,7 @@ def stats_header(vary_keys: list[str]) -> list[str]:
 
 
 def write_stats(path, cases: list[Case], vary_keys: list[str], results: dict[str, dict],
-                known: dict[str, list[str]] | None = None) -> None:
+                known: Mapping[str, list[str]] | None = None) -> None:
     """stats.csv: for each scale level and vary combination, over its motions, the count of
     finished runs, the failed ones, and mean, median, 84th percentile (numpy's linear
     interpolation between order statistics) and max of every peak; the bytes Python's csv
@@ -94,17 +134,33 @@ def write_stats(path, cases: list[Case], vary_keys: list[str], results: dict[str
             fh.write(lines)
 
 
-def peak_cells(header: list[str], rows: list[list], cases: list[Case]) -> dict[str, list[str]]:
+class PeakCells(Mapping):
+    """Each case's peak cells in cases.csv, by case key, read from its row where asked."""
+
+    def __init__(self, rows: Sequence, keys: list[str], lo: int, hi: int):
+        self._rows, self._lo, self._hi = rows, lo, hi
+        self._at = {k: i for i, k in enumerate(keys)}
+
+    def __getitem__(self, key: str) -> list[str]:
+        return self._rows[self._at[key]][self._lo:self._hi]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._at)
+
+    def __len__(self) -> int:
+        return len(self._at)
+
+
+def peak_cells(header: list[str], rows: Sequence, cases: list[Case]) -> Mapping[str, list[str]]:
     """Each case's peak cells in cases.csv (cases_table's header and rows), by case key."""
     at = [i for i, h in enumerate(header) if h.startswith(_PREFIX["peaks"])]
     if not at:
         return {}
-    lo, hi = at[0], at[-1] + 1
-    return {c.key: row[lo:hi] for c, row in zip(cases, rows)}
+    return PeakCells(rows, [c.key for c in cases[:len(rows)]], at[0], at[-1] + 1)
 
 
 def stats_lines(cases: list[Case], vary_keys: list[str], results: dict[str, dict],
-                known: dict[str, list[str]] | None = None) -> Iterator[str]:
+                known: Mapping[str, list[str]] | None = None) -> Iterator[str]:
     """stats.csv's lines after its header, GROUPS_AT_ONCE groups' at a time.
 
     Written as text, not as rows for the csv module: a sweep of 10,000 cases has 370,000 rows,
@@ -125,7 +181,7 @@ def stats_lines(cases: list[Case], vary_keys: list[str], results: dict[str, dict
 
 
 def _stats_lines(groups: list[tuple[tuple, list[Case]]], entries: dict, peaks: list[str],
-                 peak_texts: list[str], known: dict[str, list[str]]) -> str:
+                 peak_texts: list[str], known: Mapping[str, list[str]]) -> str:
     # every member's peaks in one matrix (have: the case finished and has that peak; floats:
     # every peak it has is a float, whose cell in cases.csv is its repr, not an int's text)
     names = [p[len(_PREFIX["peaks"]):] for p in peaks]
