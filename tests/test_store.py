@@ -157,3 +157,6 @@ def test_the_cases_held_compact_are_the_cases_written(tmp_path):
             assert str(e["peaks"]["at2"]) == "-0.0" and type(e["peaks"]["u1"]) is float
             assert e["accuracy"] == p["accuracy"] and type(e["accuracy"]) is dict  # (an int in it: as it is)
         assert held[0]["peaks"]._index is held[3]["peaks"]._index  # (one index of the names for all)
+        # (and one copy of each key's string and of the status, where each line had its own)
+        keys = [{k: k for k in e} for e in held]
+        assert all(keys[0][k] is keys[3][k] for k in keys[0]) and held[0]["status"] is held[3]["status"]

@@ -26,6 +26,7 @@ import math
 import os
 import re
 import shutil
+import sys
 import uuid
 from array import array
 from collections.abc import Mapping
@@ -97,11 +98,22 @@ def compact(entry: dict, names: dict[tuple, dict[str, int]]) -> dict:
         if index is None:
             index = names[key] = {k: i for i, k in enumerate(key)}
         entry[g] = Numbers(index, array("d", values))
+    # each line's JSON (each batch's pickle) has its own copies of the keys' strings, some 50 bytes
+    # each: one copy of each for every case (interned), and of the values that repeat
+    items = list(entry.items())
+    entry.clear()
+    entry.update((sys.intern(k), v) for k, v in items)
+    for k in _REPEATED:
+        v = entry.get(k)
+        if type(v) is str:
+            entry[k] = sys.intern(v)
     return entry
 
 
 _NONE = type(None)
 _FLOAT_OR_NONE = {float, _NONE}
+#: an entry's strings that most cases share
+_REPEATED = ("status", "rbhyst_version", "message")
 
 
 def _plain(value):
