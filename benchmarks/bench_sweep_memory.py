@@ -74,7 +74,6 @@ def main() -> None:
     ap.add_argument("--cases", default="10000,100000")
     ap.add_argument("--no-plots", action="store_true")
     args = ap.parse_args()
-    from bench_sweep_batch import RECORDS  # noqa: F401  (the records the side-by-side takes)
     from rbhyst.analyses.sweep import worker
     from rbhyst.sweep import load_sweep
 

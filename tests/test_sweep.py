@@ -1043,7 +1043,8 @@ def test_cases_csv_rows_held_as_lines_are_the_csv_module_s(tmp_path):
     slice or in turn, reads back as the cells it was made from, a message with a comma, a quote
     or a line break among them."""
     from rbhyst.analyses.sweep.cases import Case, format_value
-    from rbhyst.analyses.sweep.tables import CaseRows, cases_table, to_csv, write_case_rows
+    from rbhyst.analyses.sweep.tables import CaseRows, cases_table, write_case_rows
+    from rbhyst.files.csvfile import to_csv
 
     titles = ["a,b", 'say "x"', "two\nlines", "", " lead", "plain", "é"]
     cases = [Case(k + 1, f"m{k % 2}", 0.5 + k, 1.0, {"title": v}, {}, f"{k:032x}") for k, v in enumerate(titles)]

@@ -11,7 +11,7 @@ from __future__ import annotations
 import functools
 import math
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -80,12 +80,12 @@ class ScaledSeries(Series):
     read once per process and scaled per run, so what is linear in its samples is taken from
     the record itself (``of``), once."""
 
-    of: Series | None = None
-    factor: float = 1.0
+    of: Series = field(kw_only=True)
+    factor: float = field(kw_only=True)
 
     @functools.cached_property
     def velocity_change(self) -> float:
-        return abs(self.factor) * self.of.velocity_change if self.of is not None else super().velocity_change
+        return abs(self.factor) * self.of.velocity_change
 
 
 @dataclass(frozen=True)

@@ -13,8 +13,6 @@ from collections.abc import Iterable, Iterator, Mapping, Sequence
 
 import numpy as np
 
-from rbhyst.files.csvfile import to_csv, write_csv  # noqa: F401  (the sweep's tables are written with them)
-
 from rbhyst.analyses.sweep.cases import Case, format_value
 
 #: the percentile stats.csv reports beside the median, by numpy's default (linear) rule
